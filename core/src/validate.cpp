@@ -1,0 +1,64 @@
+#include "validate.h"
+
+#include <cstdio>
+
+namespace handsim::validate {
+
+void fail(const std::string& argument, const std::string& message, Status status) {
+  throw Error(status, argument, message);
+}
+
+std::string fmt(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+std::string fmt(const Vec3& v) { return "(" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + ")"; }
+
+void finite(double v, const std::string& argument) {
+  if (!std::isfinite(v)) fail(argument, "must be finite, got " + fmt(v));
+}
+
+void finite(const Vec3& v, const std::string& argument) {
+  if (!v.allFinite()) fail(argument, "must be finite, got " + fmt(v));
+}
+
+void positive(double v, const std::string& argument) {
+  if (!std::isfinite(v) || v <= 0) fail(argument, "must be finite and > 0, got " + fmt(v));
+}
+
+void non_negative(double v, const std::string& argument) {
+  if (!std::isfinite(v) || v < 0) fail(argument, "must be finite and >= 0, got " + fmt(v));
+}
+
+void positive(const Vec3& v, const std::string& argument) {
+  if (!v.allFinite() || (v.array() <= 0).any())
+    fail(argument, "every component must be finite and > 0, got " + fmt(v));
+}
+
+Quat unit_quat(const Quat& q, const std::string& argument) {
+  if (!q.coeffs().allFinite()) fail(argument, "quaternion must be finite");
+  double n = q.norm();
+  if (std::abs(n - 1.0) > kQuatTolerance)
+    fail(argument, "quaternion (x,y,z,w) must have unit length (within 1e-3), got length " + fmt(n));
+  return q.normalized();
+}
+
+Pose pose(const Pose& p, const std::string& argument) {
+  finite(p.position, argument + ".position");
+  return {p.position, unit_quat(p.orientation, argument + ".orientation")};
+}
+
+Vec3 unit_vector(const Vec3& v, const std::string& argument) {
+  finite(v, argument);
+  double n = v.norm();
+  if (!(n > 1e-12)) fail(argument, "must be a non-zero direction, got " + fmt(v));
+  return v / n;
+}
+
+void time_step(double dt, const std::string& argument) {
+  if (!std::isfinite(dt) || dt <= 0) fail(argument, "must be finite and > 0, got " + fmt(dt));
+}
+
+}  // namespace handsim::validate
