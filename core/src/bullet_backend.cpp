@@ -1,0 +1,183 @@
+// The only file of the world that includes Bullet (bullet_particles.cpp, the paper-mode particle
+// baseline, is the other Bullet user).
+#include "bullet_backend.h"
+
+#include <btBulletDynamicsCommon.h>
+#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+
+#include <vector>
+
+namespace handsim {
+namespace {
+
+btVector3 bt(const Vec3& v) { return btVector3(v.x(), v.y(), v.z()); }
+Vec3 from_bt(const btVector3& v) { return Vec3(v.x(), v.y(), v.z()); }
+
+btTransform bt(const Pose& p) {
+  const Quat& q = p.orientation;
+  return btTransform(btQuaternion(q.x(), q.y(), q.z(), q.w()), bt(p.position));
+}
+
+Pose from_bt(const btTransform& t) {
+  btQuaternion q = t.getRotation();
+  return {from_bt(t.getOrigin()), Quat(q.w(), q.x(), q.y(), q.z()).normalized()};
+}
+
+// Bullet shapes keep pointers into their vertex/index arrays, so a triangle mesh owns its arrays here.
+struct MeshStorage {
+  std::vector<btScalar> vertices;
+  std::vector<int> indices;
+  std::unique_ptr<btTriangleIndexVertexArray> array;
+};
+
+std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<MeshStorage>& mesh) {
+  switch (s.type) {
+    case ShapeType::Box:
+      return std::make_unique<btBoxShape>(bt(s.half_extents));
+    case ShapeType::Sphere:
+      return std::make_unique<btSphereShape>(s.radius);
+    case ShapeType::Capsule:
+      return std::make_unique<btCapsuleShape>(s.radius, 2 * s.half_height);
+    case ShapeType::ConvexHull: {
+      auto hull = std::make_unique<btConvexHullShape>();
+      for (const Vec3& p : s.points) hull->addPoint(bt(p), false);
+      hull->recalcLocalAabb();
+      hull->setMargin(0);
+      return hull;
+    }
+    case ShapeType::TriangleMesh: {
+      mesh = std::make_unique<MeshStorage>();
+      for (const Vec3& p : s.points)
+        for (int k = 0; k < 3; ++k) mesh->vertices.push_back(p[k]);
+      mesh->indices = s.indices;
+      mesh->array = std::make_unique<btTriangleIndexVertexArray>(
+          int(mesh->indices.size() / 3), mesh->indices.data(), int(3 * sizeof(int)),
+          int(s.points.size()), mesh->vertices.data(), int(3 * sizeof(btScalar)));
+      return std::make_unique<btBvhTriangleMeshShape>(mesh->array.get(), true);
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+struct BulletBackend::Impl {
+  struct Entry {
+    std::unique_ptr<MeshStorage> mesh;
+    std::unique_ptr<btCollisionShape> shape;
+    std::unique_ptr<btRigidBody> body;
+  };
+
+  btDefaultCollisionConfiguration config;
+  btCollisionDispatcher dispatcher{&config};
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
+  std::vector<Entry> entries;
+  std::vector<int> free_handles;
+  Entry ground;
+
+  explicit Impl(const WorldDef& def) {
+    world.setGravity(bt(def.gravity));
+    if (def.ground) {
+      ground.shape = std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), def.ground_height);
+      btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, ground.shape.get());
+      info.m_friction = def.ground_friction;
+      ground.body = std::make_unique<btRigidBody>(info);
+      world.addRigidBody(ground.body.get());
+    }
+  }
+
+  ~Impl() {
+    for (Entry& e : entries)
+      if (e.body) world.removeRigidBody(e.body.get());
+    if (ground.body) world.removeRigidBody(ground.body.get());
+  }
+
+  static void apply_motion(btRigidBody& body, BodyMotion motion, double mass) {
+    btVector3 inertia(0, 0, 0);
+    const bool dynamic = motion == BodyMotion::Dynamic;
+    if (dynamic) body.getCollisionShape()->calculateLocalInertia(mass, inertia);
+    body.setMassProps(dynamic ? mass : 0, inertia);
+    int flags = body.getCollisionFlags() & ~(btCollisionObject::CF_KINEMATIC_OBJECT |
+                                             btCollisionObject::CF_STATIC_OBJECT);
+    if (motion == BodyMotion::Kinematic) flags |= btCollisionObject::CF_KINEMATIC_OBJECT;
+    if (motion == BodyMotion::Static) flags |= btCollisionObject::CF_STATIC_OBJECT;
+    body.setCollisionFlags(flags);
+    // Kinematic bodies are driven every frame by the hand; letting them sleep would freeze contacts.
+    body.forceActivationState(motion == BodyMotion::Kinematic ? DISABLE_DEACTIVATION : ACTIVE_TAG);
+    body.updateInertiaTensor();
+  }
+};
+
+BulletBackend::BulletBackend(const WorldDef& def) : impl_(std::make_unique<Impl>(def)) {}
+BulletBackend::~BulletBackend() = default;
+
+int BulletBackend::add(const BodyDef& def, BodyMotion motion) {
+  Impl::Entry e;
+  e.shape = make_shape(def.shape, e.mesh);
+  btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, e.shape.get());
+  info.m_startWorldTransform = bt(def.pose);
+  info.m_friction = def.friction;
+  info.m_restitution = def.restitution;
+  e.body = std::make_unique<btRigidBody>(info);
+  Impl::apply_motion(*e.body, motion, def.mass);
+  e.body->setLinearVelocity(bt(def.linear_velocity));
+  e.body->setAngularVelocity(bt(def.angular_velocity));
+  impl_->world.addRigidBody(e.body.get());
+
+  int handle;
+  if (!impl_->free_handles.empty()) {
+    handle = impl_->free_handles.back();
+    impl_->free_handles.pop_back();
+    impl_->entries[handle] = std::move(e);
+  } else {
+    handle = int(impl_->entries.size());
+    impl_->entries.push_back(std::move(e));
+  }
+  return handle;
+}
+
+void BulletBackend::remove(int handle) {
+  Impl::Entry& e = impl_->entries[handle];
+  impl_->world.removeRigidBody(e.body.get());
+  e = Impl::Entry();
+  impl_->free_handles.push_back(handle);
+}
+
+void BulletBackend::set_motion(int handle, BodyMotion motion, double mass) {
+  btRigidBody& body = *impl_->entries[handle].body;
+  // Bullet caches static/kinematic state in the broadphase filter, so re-add the body after the change.
+  impl_->world.removeRigidBody(&body);
+  Impl::apply_motion(body, motion, mass);
+  impl_->world.addRigidBody(&body);
+}
+
+void BulletBackend::write(int handle, const Pose& pose, const Vec3& linear, const Vec3& angular) {
+  btRigidBody& body = *impl_->entries[handle].body;
+  body.setWorldTransform(bt(pose));
+  body.setInterpolationWorldTransform(bt(pose));
+  body.setLinearVelocity(bt(linear));
+  body.setAngularVelocity(bt(angular));
+  body.setInterpolationLinearVelocity(bt(linear));
+  body.setInterpolationAngularVelocity(bt(angular));
+  body.activate(true);
+}
+
+void BulletBackend::move_kinematic(int handle, const Pose& pose) {
+  impl_->entries[handle].body->setWorldTransform(bt(pose));
+}
+
+void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const {
+  const btRigidBody& body = *impl_->entries[handle].body;
+  pose = from_bt(body.getWorldTransform());
+  linear = from_bt(body.getLinearVelocity());
+  angular = from_bt(body.getAngularVelocity());
+}
+
+void BulletBackend::step(double h) {
+  // maxSubSteps = 0: Bullet takes exactly one step of length h; the world does the substepping.
+  impl_->world.stepSimulation(h, 0, h);
+}
+
+}  // namespace handsim

@@ -1,0 +1,35 @@
+// Free-body dynamics and object-object collision, delegated to Bullet. This header is Bullet-free on
+// purpose: the core owns every body's state in double and pushes it to / pulls it from Bullet around each
+// substep, so no Bullet type leaks past bullet_backend.cpp.
+#pragma once
+
+#include "handsim/world.h"
+
+#include <memory>
+
+namespace handsim {
+
+class BulletBackend {
+ public:
+  explicit BulletBackend(const WorldDef& def);
+  ~BulletBackend();
+  BulletBackend(const BulletBackend&) = delete;
+  BulletBackend& operator=(const BulletBackend&) = delete;
+
+  // Returns a backend handle (an index, reused after remove).
+  int add(const BodyDef& def, BodyMotion motion);
+  void remove(int handle);
+  void set_motion(int handle, BodyMotion motion, double mass);
+  // Push the core's state; wakes the body.
+  void write(int handle, const Pose& pose, const Vec3& linear, const Vec3& angular);
+  // Move a kinematic body for the coming substep; Bullet derives its velocity from the change.
+  void move_kinematic(int handle, const Pose& pose);
+  void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
+  void step(double h);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace handsim

@@ -1,0 +1,213 @@
+// The foundation: bodies in a Bullet-backed world, checked against analytic answers.
+#include "handsim/world.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+using namespace handsim;
+
+namespace {
+
+BodyDef box_at(double y, double half = 0.05, double mass = 1.0) {
+  BodyDef def;
+  def.shape = ShapeDef::box(Vec3::Constant(half));
+  def.mass = mass;
+  def.pose.position = Vec3(0, y, 0);
+  return def;
+}
+
+}  // namespace
+
+TEST(World, BoxComesToRestAtHalfHeightAndStays) {
+  World world;
+  BodyId box = world.add_body(box_at(0.5));
+  for (int i = 0; i < 60 * 3; ++i) world.step(1.0 / 60);
+  EXPECT_NEAR(world.body_pose(box).position.y(), 0.05, 1e-3);
+  for (int i = 0; i < 60 * 10; ++i) {
+    world.step(1.0 / 60);
+    ASSERT_NEAR(world.body_pose(box).position.y(), 0.05, 1e-3) << "frame " << i;
+  }
+  EXPECT_LT(world.body_linear_velocity(box).norm(), 1e-3);
+}
+
+TEST(World, FreeFallMatchesSemiImplicitEulerAndHalfGTSquared) {
+  WorldDef def;
+  def.ground = false;
+  World world(def);
+  BodyId ball = world.add_body(box_at(100.0));
+  const double g = 9.81, h = def.fixed_substep;
+  const int frames = 120;  // 2 s at 60 Hz, 4 substeps each
+  for (int i = 0; i < frames; ++i) world.step(1.0 / 60);
+  const int n = frames * 4;
+  const double t = n * h;
+  // Bullet integrates v += g h, then x += v h: after n substeps the drop is g h^2 n (n + 1) / 2,
+  // which differs from the exact g t^2 / 2 by g h t / 2.
+  const double drop = 100.0 - world.body_pose(ball).position.y();
+  EXPECT_NEAR(drop, g * h * h * n * (n + 1) / 2, 1e-9);
+  EXPECT_NEAR(drop, 0.5 * g * t * t, 0.5 * g * h * t + 1e-9);
+  EXPECT_NEAR(world.body_linear_velocity(ball).y(), -g * t, 1e-9);
+}
+
+TEST(World, DeterminismSameInputsSameHashDifferentInputsDifferentHash) {
+  auto run = [](double x0) {
+    World world;
+    for (int i = 0; i < 5; ++i) {
+      BodyDef def = box_at(0.2 + 0.12 * i);
+      def.pose.position.x() = x0 + 0.01 * i;
+      def.pose.orientation = Quat(Eigen::AngleAxisd(0.3 * i, Vec3(1, 2, 3).normalized()));
+      world.add_body(def);
+    }
+    for (int i = 0; i < 1000; ++i) world.step(1.0 / 60);
+    return world.state_hash();
+  };
+  const uint64_t a = run(0.0);
+  EXPECT_EQ(a, run(0.0));
+  EXPECT_NE(a, run(1e-6));
+}
+
+TEST(World, StaleAndForeignIdsAreRejectedNeverReused) {
+  World world, other;
+  BodyId a = world.add_body(box_at(1));
+  world.remove_body(a);
+  BodyId b = world.add_body(box_at(1));
+  EXPECT_EQ(a.index, b.index);  // the slot is reused ...
+  EXPECT_NE(a.generation, b.generation);  // ... under a new generation
+  EXPECT_FALSE(world.contains(a));
+  EXPECT_TRUE(world.contains(b));
+  try {
+    world.body_pose(a);
+    FAIL() << "stale id accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::StaleId);
+    EXPECT_EQ(e.argument(), "body");
+  }
+  other.add_body(box_at(1));
+  BodyId foreign = other.bodies().front();
+  ASSERT_EQ(foreign.index, b.index);
+  EXPECT_FALSE(world.contains(foreign));  // same slot index, but another world's generation salt
+  EXPECT_THROW(world.body_pose(foreign), Error);
+  EXPECT_THROW(world.remove_body(BodyId{}), Error);
+}
+
+TEST(World, KinematicBodyIsMovedOnlyByItsPose) {
+  World world;
+  BodyDef def = box_at(1.0);
+  def.kinematic = true;
+  BodyId k = world.add_body(def);
+  for (int i = 0; i < 60; ++i) world.step(1.0 / 60);
+  EXPECT_EQ(world.body_pose(k).position, Vec3(0, 1.0, 0));
+  Pose p;
+  p.position = Vec3(0.3, 0.7, -0.2);
+  world.set_body_pose(k, p);
+  world.step(1.0 / 60);
+  EXPECT_EQ(world.body_pose(k).position, p.position);
+}
+
+TEST(World, NearUnitQuaternionIsNormalized) {
+  World world;
+  BodyDef def = box_at(1.0);
+  def.pose.orientation = Quat(1.0005, 0, 0, 0);
+  BodyId id = world.add_body(def);
+  EXPECT_NEAR(world.body_pose(id).orientation.norm(), 1.0, 1e-15);
+}
+
+// Every public call with bad arguments: the right status, a message naming the argument, and the world
+// unchanged (same state_hash) afterwards.
+TEST(World, BadInputTable) {
+  World world;
+  BodyId box = world.add_body(box_at(0.5));
+  BodyId removed = world.add_body(box_at(2.0));
+  world.remove_body(removed);
+  for (int i = 0; i < 10; ++i) world.step(1.0 / 60);
+  const double nan = std::nan("");
+  auto with = [](std::function<void(BodyDef&)> edit) {
+    BodyDef def = box_at(1);
+    edit(def);
+    return def;
+  };
+  struct Case {
+    const char* name;
+    std::function<void()> call;
+    Status status;
+    const char* argument;
+  };
+  Pose far_quat;
+  far_quat.orientation = Quat(0.9, 0, 0, 0);
+  Pose nan_pose;
+  nan_pose.position.x() = nan;
+  const std::vector<Case> cases = {
+      {"dt zero", [&] { world.step(0); }, Status::InvalidArgument, "dt"},
+      {"dt negative", [&] { world.step(-1); }, Status::InvalidArgument, "dt"},
+      {"dt nan", [&] { world.step(nan); }, Status::InvalidArgument, "dt"},
+      {"dt inf", [&] { world.step(INFINITY); }, Status::InvalidArgument, "dt"},
+      {"negative size", [&] { world.add_body(with([](BodyDef& d) { d.shape.half_extents.x() = -1; })); },
+       Status::InvalidArgument, "body.shape.half_extents"},
+      {"zero radius", [&] { world.add_body(with([](BodyDef& d) { d.shape = ShapeDef::sphere(0); })); },
+       Status::InvalidArgument, "body.shape.radius"},
+      {"negative mass", [&] { world.add_body(with([](BodyDef& d) { d.mass = -1; })); },
+       Status::InvalidArgument, "body.mass"},
+      {"nan mass", [&] { world.add_body(with([&](BodyDef& d) { d.mass = nan; })); },
+       Status::InvalidArgument, "body.mass"},
+      {"nan position", [&] { world.add_body(with([&](BodyDef& d) { d.pose.position.y() = nan; })); },
+       Status::InvalidArgument, "body.pose.position"},
+      {"non-unit quat", [&] { world.add_body(with([](BodyDef& d) { d.pose.orientation = Quat(0.5, 0, 0, 0); })); },
+       Status::InvalidArgument, "body.pose.orientation"},
+      {"zero quat", [&] { world.add_body(with([](BodyDef& d) { d.pose.orientation = Quat(0, 0, 0, 0); })); },
+       Status::InvalidArgument, "body.pose.orientation"},
+      {"nan velocity", [&] { world.add_body(with([&](BodyDef& d) { d.linear_velocity.z() = nan; })); },
+       Status::InvalidArgument, "body.linear_velocity"},
+      {"negative friction", [&] { world.add_body(with([](BodyDef& d) { d.friction = -0.1; })); },
+       Status::InvalidArgument, "body.friction"},
+      {"hull too small", [&] { world.add_body(with([](BodyDef& d) { d.shape = ShapeDef::convex_hull({Vec3::Zero()}); })); },
+       Status::InvalidArgument, "body.shape.points"},
+      {"mesh bad index", [&] {
+         world.add_body(with([](BodyDef& d) {
+           d.mass = 0;
+           d.shape = ShapeDef::triangle_mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)}, {0, 1, 7});
+         }));
+       }, Status::InvalidArgument, "body.shape.indices"},
+      {"dynamic mesh", [&] {
+         world.add_body(with([](BodyDef& d) {
+           d.shape = ShapeDef::triangle_mesh({Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)}, {0, 1, 2});
+         }));
+       }, Status::InvalidArgument, "body.mass"},
+      {"stale pose", [&] { world.body_pose(removed); }, Status::StaleId, "body"},
+      {"stale set pose", [&] { world.set_body_pose(removed, Pose()); }, Status::StaleId, "body"},
+      {"stale remove", [&] { world.remove_body(removed); }, Status::StaleId, "body"},
+      {"null id", [&] { world.body_linear_velocity(BodyId{}); }, Status::StaleId, "body"},
+      {"set pose nan", [&] { world.set_body_pose(box, nan_pose); }, Status::InvalidArgument, "pose.position"},
+      {"set pose bad quat", [&] { world.set_body_pose(box, far_quat); }, Status::InvalidArgument, "pose.orientation"},
+      {"set velocity nan", [&] { world.set_body_velocity(box, Vec3(nan, 0, 0), Vec3::Zero()); },
+       Status::InvalidArgument, "linear"},
+      {"set angular inf", [&] { world.set_body_velocity(box, Vec3::Zero(), Vec3(0, INFINITY, 0)); },
+       Status::InvalidArgument, "angular"},
+  };
+  const uint64_t before = world.state_hash();
+  const size_t bodies_before = world.bodies().size();
+  for (const Case& c : cases) {
+    try {
+      c.call();
+      ADD_FAILURE() << c.name << ": no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), c.status) << c.name << ": " << e.what();
+      EXPECT_EQ(e.argument(), c.argument) << c.name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(c.argument, 0), 0u) << c.name << ": " << e.what();
+    }
+    EXPECT_EQ(world.state_hash(), before) << c.name;
+    EXPECT_EQ(world.bodies().size(), bodies_before) << c.name;
+  }
+}
+
+TEST(World, BadWorldDef) {
+  WorldDef def;
+  def.fixed_substep = 0;
+  EXPECT_THROW(World{def}, Error);
+  def = WorldDef();
+  def.gravity.x() = std::nan("");
+  EXPECT_THROW(World{def}, Error);
+  def = WorldDef();
+  def.max_substeps = 0;
+  EXPECT_THROW(World{def}, Error);
+}
