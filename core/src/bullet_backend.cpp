@@ -30,7 +30,7 @@ struct MeshStorage {
   std::unique_ptr<btTriangleIndexVertexArray> array;
 };
 
-std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<MeshStorage>& mesh) {
+std::unique_ptr<btCollisionShape> make_raw_shape(const ShapeDef& s, std::unique_ptr<MeshStorage>& mesh) {
   switch (s.type) {
     case ShapeType::Box:
       return std::make_unique<btBoxShape>(bt(s.half_extents));
@@ -42,7 +42,6 @@ std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<
       auto hull = std::make_unique<btConvexHullShape>();
       for (const Vec3& p : s.points) hull->addPoint(bt(p), false);
       hull->recalcLocalAabb();
-      hull->setMargin(0);
       return hull;
     }
     case ShapeType::TriangleMesh: {
@@ -57,6 +56,20 @@ std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<
     }
   }
   return nullptr;
+}
+
+// Bullet's default 4 cm collision margin is tuned for metre-sized objects; on a hand-held 5 cm box it
+// rounds the corners so much that a flat landing tumbles. Use a margin proportional to the shape.
+double margin_for(const ShapeDef& s) {
+  Vec3 lo, hi;
+  shape_local_bounds(s, lo, hi);
+  return std::min(0.004, 0.05 * (hi - lo).minCoeff());
+}
+
+std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<MeshStorage>& mesh) {
+  auto shape = make_raw_shape(s, mesh);
+  if (s.type == ShapeType::Box || s.type == ShapeType::ConvexHull) shape->setMargin(margin_for(s));
+  return shape;
 }
 
 }  // namespace
@@ -80,8 +93,13 @@ struct BulletBackend::Impl {
   explicit Impl(const WorldDef& def) {
     world.setGravity(bt(def.gravity));
     if (def.ground) {
-      ground.shape = std::make_unique<btStaticPlaneShape>(btVector3(0, 1, 0), def.ground_height);
+      // A large box rather than btStaticPlaneShape: box-box contact gives a full four-point manifold at
+      // once, where the plane starts from one point and makes flat landings tumble.
+      constexpr double kHalf = 1000.0;
+      ground.shape = std::make_unique<btBoxShape>(btVector3(kHalf, 1.0, kHalf));
+      ground.shape->setMargin(0.004);
       btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, ground.shape.get());
+      info.m_startWorldTransform.setOrigin(btVector3(0, def.ground_height - 1.0, 0));
       info.m_friction = def.ground_friction;
       ground.body = std::make_unique<btRigidBody>(info);
       world.addRigidBody(ground.body.get());

@@ -211,3 +211,18 @@ TEST(World, BadWorldDef) {
   def.max_substeps = 0;
   EXPECT_THROW(World{def}, Error);
 }
+
+TEST(World, FlatDropLandsFlatWithoutDrift) {
+  for (double mass : {0.05, 0.2, 1.0, 10.0}) {
+    World world;
+    BodyId box = world.add_body(box_at(0.5, 0.05, mass));
+    for (int i = 0; i < 120; ++i) world.step(1.0 / 60);
+    const Pose p = world.body_pose(box);
+    EXPECT_NEAR(p.position.y(), 0.05, 1e-3) << "mass " << mass;
+    EXPECT_LT(p.position.head<1>().norm() + std::abs(p.position.z()), 1e-3) << "mass " << mass;
+    // Resting flat: the box's up axis is the world's (the sequential-impulse solver may leave a small yaw).
+    const double tilt = std::acos(std::min(1.0, (p.orientation * Vec3::UnitY()).y()));
+    EXPECT_LT(tilt, 1e-4) << "mass " << mass;
+    EXPECT_LT(p.orientation.angularDistance(Quat::Identity()), 1e-2) << "mass " << mass;
+  }
+}

@@ -1,0 +1,9 @@
+// The binders each bind_*.cpp file provides to module.cpp.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace handsim {
+void bind_errors(pybind11::module_& m);
+void bind_world(pybind11::module_& m);
+}  // namespace handsim

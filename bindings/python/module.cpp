@@ -1,0 +1,18 @@
+// handsim._core: the pybind11 module. Each bind_*.cpp file binds one public header.
+#include "bindings.h"
+
+#include "handsim/types.h"
+
+namespace py = pybind11;
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "handsim C++ core: hands, grasping and jointed objects (Kim & Park, Algorithm 1)";
+  m.attr("__version__") = handsim::version();
+#ifdef HANDSIM_WITH_CERES
+  m.attr("WITH_CERES") = true;
+#else
+  m.attr("WITH_CERES") = false;
+#endif
+  handsim::bind_errors(m);
+  handsim::bind_world(m);
+}
