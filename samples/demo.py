@@ -12,7 +12,7 @@ def main():
     print(f"handsim {handsim.__version__}: 3 boxes dropped, after {world.time:.1f} s:")
     for i, box in enumerate(boxes):
         x, y, z = world.body_pose(box)[:3]
-        print(f"  box {i}: resting at y = {y:.4f} m (expected {0.05 + 0.1 * i:.4f})")
+        print(f"  box {i}: at ({x:+.3f}, {y:.3f}, {z:+.3f}) m")
     print(f"state hash {world.state_hash():#018x}")
 
 
