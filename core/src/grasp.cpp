@@ -1,0 +1,211 @@
+#include "grasp.h"
+
+#include "validate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+namespace handsim {
+namespace {
+
+// Pruning margins (radians / dot units). They only make the exact pair scan look at a few more pairs (or skip
+// a quick reject), so they trade speed, never correctness, against rounding in acos and the products.
+constexpr double kAngleMargin = 1e-9;
+constexpr double kDotMargin = 1e-12;
+
+void check_directions(const std::vector<Vec3>& d) {
+  for (size_t i = 0; i < d.size(); ++i) {
+    double n2 = d[i].squaredNorm();
+    if (!(std::abs(n2 - 1.0) <= 1e-6))  // also catches NaN
+      validate::fail("directions[" + std::to_string(i) + "]",
+                     "must be a unit vector, got " + validate::fmt(d[i]));
+  }
+}
+
+// O(n): the extreme directions along an axis are the likeliest opposing pair; test it.
+bool extremes_oppose(const std::vector<Vec3>& d, const Vec3& axis, double c) {
+  size_t lo = 0, hi = 0;
+  for (size_t i = 1; i < d.size(); ++i) {
+    double s = d[i].dot(axis);
+    if (s < d[lo].dot(axis)) lo = i;
+    if (s > d[hi].dot(axis)) hi = i;
+  }
+  return lo != hi && d[lo].dot(d[hi]) < c;
+}
+
+// O(n): if every direction lies within angle alpha of the axis, every pair is within 2*alpha, so every
+// d_i . d_j >= cos(2 alpha) = 2 cos^2(alpha) - 1 (when alpha <= 90 deg). True when that rules out d_i . d_j < c.
+bool cone_excludes(const std::vector<Vec3>& d, const Vec3& axis, double c) {
+  double cos_alpha = 1.0;
+  for (const Vec3& di : d) cos_alpha = std::min(cos_alpha, di.dot(axis));
+  return cos_alpha > 0 && 2 * cos_alpha * cos_alpha - 1 >= c + kDotMargin;
+}
+
+// Exact scan. theta_i = angle of d_i to the axis; the angle between d_i and d_j is at most theta_i + theta_j,
+// so d_i . d_j < c needs theta_i + theta_j > acos(c). With the thetas sorted in decreasing order, each row of
+// the scan stops at the first partner too close to the axis, and the whole scan stops at the first empty row.
+bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c) {
+  const size_t n = d.size();
+  std::vector<double> theta(n);
+  for (size_t i = 0; i < n; ++i) theta[i] = std::acos(std::clamp(d[i].dot(axis), -1.0, 1.0));
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return theta[a] > theta[b]; });
+  const double needed = std::acos(std::clamp(c, -1.0, 1.0)) - kAngleMargin;
+  for (size_t a = 0; a + 1 < n; ++a) {
+    const size_t i = order[a];
+    if (theta[i] + theta[order[a + 1]] <= needed) return false;
+    for (size_t b = a + 1; b < n && theta[i] + theta[order[b]] > needed; ++b)
+      if (d[i].dot(d[order[b]]) < c) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+bool opposing_contacts(const std::vector<Vec3>& directions, double c) {
+  validate::finite(c, "c");
+  check_directions(directions);
+  const auto& d = directions;
+  if (d.size() < 2) return false;
+  if (c > 1.0 + kDotMargin) return true;  // every pair qualifies
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& di : d) mean += di;
+  // A mean that nearly cancels (directions all around) is no useful axis; x is as good as any then.
+  Vec3 axis = mean.norm() > 1e-6 * double(d.size()) ? Vec3(mean.normalized()) : Vec3(Vec3::UnitX());
+  for (const Vec3& a : {axis, Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ())})
+    if (extremes_oppose(d, a, c)) return true;
+  if (cone_excludes(d, axis, c)) return false;
+  return scan_pairs(d, axis, c);
+}
+
+void validate_grasp_settings(const GraspSettings& s) {
+  validate::finite(s.cos_threshold, "cos_threshold");
+  if (s.frames_to_grasp < 1) validate::fail("frames_to_grasp", "must be >= 1, got " + std::to_string(s.frames_to_grasp));
+  if (s.frames_to_release < 1)
+    validate::fail("frames_to_release", "must be >= 1, got " + std::to_string(s.frames_to_release));
+  validate::non_negative(s.release_distance, "release_distance");
+  validate::non_negative(s.tracking_grace_s, "tracking_grace_s");
+  if (s.velocity_window < 2) validate::fail("velocity_window", "must be >= 2, got " + std::to_string(s.velocity_window));
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// GraspTracker
+
+GraspTracker::GraspTracker(const GraspSettings& settings) : settings_(settings) {
+  validate_grasp_settings(settings);
+}
+
+void GraspTracker::reset() {
+  state_ = GraspState::Free;
+  grasp_streak_ = empty_streak_ = 0;
+  untracked_s_ = 0;
+}
+
+GraspEvent GraspTracker::update(const GraspInput& in) {
+  validate::time_step(in.dt, "dt");
+  if (in.contact_count < 0) validate::fail("contact_count", "must be >= 0, got " + std::to_string(in.contact_count));
+  return state_ == GraspState::Free ? update_free(in) : update_grasped(in);
+}
+
+GraspEvent GraspTracker::update_free(const GraspInput& in) {
+  // An untracked hand's contacts are stale: it cannot start a grasp, and it breaks a streak.
+  bool condition = in.hand_tracked && in.opposing && in.contact_count >= 2;
+  grasp_streak_ = condition ? grasp_streak_ + 1 : 0;
+  if (grasp_streak_ < settings_.frames_to_grasp) return {};
+  state_ = GraspState::Grasped;
+  grasp_streak_ = empty_streak_ = 0;
+  untracked_s_ = 0;
+  return {GraspEventType::GraspBegin, ReleaseReason::None, false};
+}
+
+GraspEvent GraspTracker::update_grasped(const GraspInput& in) {
+  if (!in.hand_tracked) {
+    // Hold through short dropouts; the empty-contact streak is frozen, not reset, since nothing was observed.
+    untracked_s_ += in.dt;
+    return untracked_s_ > settings_.tracking_grace_s ? end(ReleaseReason::TrackingLost) : GraspEvent{};
+  }
+  untracked_s_ = 0;
+  empty_streak_ = in.contact_count == 0 ? empty_streak_ + 1 : 0;
+  return empty_streak_ >= settings_.frames_to_release ? end(ReleaseReason::Released) : GraspEvent{};
+}
+
+GraspEvent GraspTracker::end(ReleaseReason reason) {
+  reset();
+  return {GraspEventType::GraspEnd, reason, reason == ReleaseReason::TrackingLost};
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// HandMotionHistory
+
+HandMotionHistory::HandMotionHistory(int window) {
+  if (window < 2) validate::fail("window", "must be >= 2, got " + std::to_string(window));
+  samples_.resize(static_cast<size_t>(window));
+}
+
+void HandMotionHistory::push(const Pose& palm, double time) {
+  Pose p = validate::pose(palm, "palm");
+  validate::finite(time, "time");
+  if (count_ > 0 && !(time > sample(0).time))
+    validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(sample(0).time));
+  samples_[static_cast<size_t>(next_)] = {p, time};
+  next_ = (next_ + 1) % window();
+  count_ = std::min(count_ + 1, window());
+}
+
+const HandMotionHistory::Sample& HandMotionHistory::sample(int age) const {
+  int w = window();
+  return samples_[static_cast<size_t>(((next_ - 1 - age) % w + w) % w)];
+}
+
+// Times are taken relative to the newest sample so long sessions (t ~ 1e5 s) keep sub-microsecond spacing.
+double HandMotionHistory::mean_time_offset() const {
+  double sum = 0;
+  for (int k = 0; k < count_; ++k) sum += sample(k).time - sample(0).time;
+  return sum / count_;
+}
+
+double HandMotionHistory::time_spread() const {
+  double mean = mean_time_offset(), s = 0;
+  for (int k = 0; k < count_; ++k) {
+    double tau = sample(k).time - sample(0).time - mean;
+    s += tau * tau;
+  }
+  return s;
+}
+
+// Least-squares slope of x(t): sum (tau_k - mean) x_k / sum (tau_k - mean)^2, with x_k relative to the newest.
+Vec3 HandMotionHistory::linear_velocity() const {
+  if (!has_velocity()) return Vec3::Zero();
+  double mean = mean_time_offset();
+  Vec3 num = Vec3::Zero();
+  for (int k = 0; k < count_; ++k)
+    num += (sample(k).time - sample(0).time - mean) * (sample(k).pose.position - sample(0).pose.position);
+  return num / time_spread();
+}
+
+// Same slope for the rotation vectors r_k = log(q_k q_newest^-1). Under a constant world-frame angular
+// velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is w.
+Vec3 HandMotionHistory::angular_velocity() const {
+  if (!has_velocity()) return Vec3::Zero();
+  double mean = mean_time_offset();
+  Quat newest_inv = sample(0).pose.orientation.conjugate();
+  Vec3 num = Vec3::Zero();
+  for (int k = 0; k < count_; ++k)
+    num += (sample(k).time - sample(0).time - mean) * rotation_vector(Quat(sample(k).pose.orientation * newest_inv));
+  return num / time_spread();
+}
+
+Vec3 HandMotionHistory::point_velocity(const Vec3& world_point) const {
+  validate::finite(world_point, "world_point");
+  if (!has_velocity()) return Vec3::Zero();
+  return linear_velocity() + angular_velocity().cross(world_point - sample(0).pose.position);
+}
+
+BodyVelocity HandMotionHistory::attached_body_velocity(const Vec3& centre_of_mass) const {
+  return {point_velocity(centre_of_mass), angular_velocity()};
+}
+
+}  // namespace handsim

@@ -1,0 +1,138 @@
+// Grasp decision (Kim & Park, Section II-B, eq. 3) and what the world needs around it: hysteresis so a
+// jittery hand neither grabs nor drops objects by accident, tolerance of short tracking losses, and the hand
+// velocity that a released object is thrown with.
+#pragma once
+
+#include "handsim/types.h"
+#include "pose_fit.h"
+
+#include <vector>
+
+namespace handsim {
+
+// Eq. 3 as printed reads "d_i^T d_i < gamma, gamma = 0.7" (the second index is garbled). Our reading: an object
+// is grasped when two penetration directions point against each other, d_i . d_j < -0.7 (more than ~134
+// degrees apart: thumb and finger pinching from opposite sides). The literal "< +0.7" (more than ~46 degrees
+// apart) stays selectable, e.g. to compare with the paper.
+constexpr double kOpposingCos = -0.7;
+constexpr double kPaperLiteralCos = 0.7;
+
+// True when some pair i != j has d_i . d_j < c. `directions` must be unit vectors (|d|^2 within 1e-6 of 1);
+// throws handsim::Error otherwise or when c is not finite. Exact: same answer as the all-pairs test.
+// Cost: O(n) for the common cases (an opposing pair among the extremes along 4 axes is found at once; all
+// directions inside a cone narrower than acos(c)/2 are rejected at once); otherwise O(n log n) sorting plus
+// a pair scan pruned by the angle to the mean direction, O(n^2) only for adversarial rings of directions.
+bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos);
+
+// Defaults assume a 60 Hz tracker (~30-90 Hz are common); the world issue is to measure them on recordings.
+struct GraspSettings {
+  double cos_threshold = kOpposingCos;  // c of opposing_contacts (see kPaperLiteralCos)
+  // 2 frames (33 ms at 60 Hz): a single frame of tracking jitter that pushes two particles into opposite
+  // faces must not grab the object, while the added latency stays below what users notice (~50 ms).
+  int frames_to_grasp = 2;
+  // 3 frames (50 ms): contacts of a held object flicker for a frame or two as the fingers jitter on its
+  // surface; releasing needs them gone for longer than that. Slightly longer than grasping because a false
+  // drop is worse than a late grab.
+  int frames_to_release = 3;
+  // Not used by GraspTracker: the world's contact query for a *grasped* object should count particles within
+  // this distance (m) of its surface as contacts, because an attached object no longer gets penetrated and
+  // its contacts would otherwise vanish at once. 5 mm ~ one particle radius of the default hand.
+  double release_distance = 0.005;
+  // 0.2 s: typical optical-tracking dropouts (occlusion by the other hand, a finger leaving the view) last
+  // a few frames; a hand that is really gone is released within a fifth of a second.
+  double tracking_grace_s = 0.2;
+  // 4 samples (50 ms at 60 Hz) for the throw velocity: a least-squares slope over 4 samples weighs one bad
+  // frame 0.3x as much as a two-frame difference does, and lags only ~25 ms.
+  int velocity_window = 4;
+};
+// Throws handsim::Error naming the bad field.
+void validate_grasp_settings(const GraspSettings& s);
+
+enum class GraspState { Free, Grasped };
+enum class GraspEventType { None, GraspBegin, GraspEnd };
+enum class ReleaseReason { None, Released, TrackingLost };
+
+struct GraspEvent {
+  GraspEventType type = GraspEventType::None;
+  ReleaseReason reason = ReleaseReason::None;  // set for GraspEnd only
+  // GraspEnd only: the hand's velocity is unknown (tracking lost), so release the object at rest rather than
+  // throwing it with a stale velocity.
+  bool zero_velocity = false;
+};
+
+// One frame of one (hand, object) pair, as the world's contact pass sees it.
+struct GraspInput {
+  bool opposing = false;    // opposing_contacts() over this pair's penetration directions
+  int contact_count = 0;    // particles of this hand touching the object (>= 0)
+  bool hand_tracked = true; // HandFrame::tracked()
+  double dt = 0;            // frame duration (s), finite and > 0
+};
+
+// The grasp state machine of one (hand, object) pair.
+//  Free -> Grasped: tracked, opposing and >= 2 contacts for frames_to_grasp consecutive frames.
+//  Grasped -> Free (Released): tracked with 0 contacts for frames_to_release consecutive frames; the
+//    opposition condition alone does not release (a held object's contacts change as fingers slide).
+//  Grasped -> Free (TrackingLost, zero_velocity): the hand stays untracked for longer than tracking_grace_s.
+//    While untracked within the grace time the grasp holds and contact counts (stale) are ignored.
+class GraspTracker {
+ public:
+  explicit GraspTracker(const GraspSettings& settings = {});
+
+  GraspEvent update(const GraspInput& input);  // throws handsim::Error on bad input, state unchanged
+  void reset();                                // back to Free, counters cleared
+
+  GraspState state() const { return state_; }
+  bool grasped() const { return state_ == GraspState::Grasped; }
+  double untracked_time() const { return untracked_s_; }
+  const GraspSettings& settings() const { return settings_; }
+
+ private:
+  GraspEvent update_free(const GraspInput& in);
+  GraspEvent update_grasped(const GraspInput& in);
+  GraspEvent end(ReleaseReason reason);
+
+  GraspSettings settings_;
+  GraspState state_ = GraspState::Free;
+  int grasp_streak_ = 0;    // consecutive frames meeting the grasp condition (Free)
+  int empty_streak_ = 0;    // consecutive tracked frames without contacts (Grasped)
+  double untracked_s_ = 0;  // time since tracking was lost (Grasped)
+};
+
+// The last few palm poses of a hand, for the velocity a released object is thrown with.
+// Velocities are least-squares slopes over the window: exact for constant linear and angular velocity, and a
+// single jittery sample moves them less than a two-sample difference would. Rotation between the oldest and
+// newest sample must stay below pi (at 60 Hz and 4 samples: |omega| < 60 rad/s).
+class HandMotionHistory {
+ public:
+  explicit HandMotionHistory(int window = GraspSettings{}.velocity_window);  // window >= 2
+
+  // Times must be finite and strictly increasing; poses finite with unit quaternions. Throws handsim::Error.
+  void push(const Pose& palm, double time);
+  void clear() { count_ = 0; }
+  int size() const { return count_; }
+  int window() const { return static_cast<int>(samples_.size()); }
+  bool has_velocity() const { return count_ >= 2; }  // below that, the velocities are zero
+
+  Vec3 linear_velocity() const;   // of the palm position (m/s)
+  Vec3 angular_velocity() const;  // world frame (rad/s)
+  // Velocity of a point rigidly attached to the palm, at its current world position x: v + w x (x - palm),
+  // with palm the latest palm position. This is what an object released from the hand should get.
+  Vec3 point_velocity(const Vec3& world_point) const;
+  // linear = point_velocity(centre_of_mass), angular = angular_velocity().
+  BodyVelocity attached_body_velocity(const Vec3& centre_of_mass) const;
+
+ private:
+  struct Sample {
+    Pose pose;
+    double time = 0;
+  };
+  const Sample& sample(int age) const;  // 0 = newest
+  double mean_time_offset() const;      // mean of (t_i - t_newest)
+  double time_spread() const;           // sum of (t_i - mean)^2
+
+  std::vector<Sample> samples_;  // ring buffer
+  int next_ = 0;
+  int count_ = 0;
+};
+
+}  // namespace handsim

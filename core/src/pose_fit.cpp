@@ -1,0 +1,156 @@
+#include "pose_fit.h"
+
+#include "validate.h"
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+
+namespace handsim {
+namespace {
+
+// Checks element-wise and builds the argument name only on failure: this runs every frame on ~1000 points.
+void check_points(const std::vector<Vec3>& points, const char* name) {
+  for (size_t i = 0; i < points.size(); ++i)
+    if (!points[i].allFinite()) validate::finite(points[i], std::string(name) + "[" + std::to_string(i) + "]");
+}
+
+void check_inputs(const std::vector<Vec3>& from, const std::vector<Vec3>& to,
+                  const std::vector<double>& weights) {
+  if (from.size() != to.size())
+    validate::fail("to", "must have as many points as from (" + std::to_string(from.size()) + "), got " +
+                             std::to_string(to.size()));
+  if (!weights.empty() && weights.size() != from.size())
+    validate::fail("weights", "must be empty or have one weight per point (" + std::to_string(from.size()) +
+                                  "), got " + std::to_string(weights.size()));
+  check_points(from, "from");
+  check_points(to, "to");
+  for (size_t i = 0; i < weights.size(); ++i)
+    if (!(std::isfinite(weights[i]) && weights[i] >= 0))
+      validate::non_negative(weights[i], "weights[" + std::to_string(i) + "]");
+}
+
+// Weights scaled so the largest is 1: sums of tiny (1e-300) or huge weights neither underflow nor overflow.
+std::vector<double> normalized_weights(const std::vector<double>& weights, size_t n) {
+  if (weights.empty()) return std::vector<double>(n, 1.0);
+  double largest = *std::max_element(weights.begin(), weights.end());
+  std::vector<double> w(weights);
+  if (largest > 0)
+    for (double& wi : w) wi /= largest;
+  return w;
+}
+
+// A point set relative to its weighted centroid. The centroid is accumulated relative to an anchor (one of
+// the points), so contacts 10 km from the origin keep their sub-micrometre offsets: summing raw coordinates
+// of magnitude 1e4 would round every offset to ~1e-12 m before the SVD even starts.
+struct Centred {
+  Vec3 anchor = Vec3::Zero();
+  Vec3 mean_offset = Vec3::Zero();  // centroid - anchor
+  std::vector<Vec3> offsets;        // x_i - centroid
+  double rms = 0;                   // weighted RMS distance from the centroid (m)
+  Vec3 centroid() const { return anchor + mean_offset; }
+};
+
+Centred centre(const std::vector<Vec3>& x, const std::vector<double>& w, double wsum, size_t anchor) {
+  Centred c;
+  c.anchor = x[anchor];
+  for (size_t i = 0; i < x.size(); ++i) c.mean_offset += w[i] * (x[i] - c.anchor);
+  c.mean_offset /= wsum;
+  c.offsets.resize(x.size());
+  double sq = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    c.offsets[i] = (x[i] - c.anchor) - c.mean_offset;
+    sq += w[i] * c.offsets[i].squaredNorm();
+  }
+  c.rms = std::sqrt(sq / wsum);
+  return c;
+}
+
+// The rotation part of the fit, from the weighted cross-covariance H = sum w q~ p~^T / W.
+// Returns R and the number of DOFs it determines (3: none of the rotation, 5: all but the twist, 6: all).
+std::pair<Mat3, int> fit_rotation(const Centred& q, const Centred& p, const std::vector<double>& w,
+                                  double wsum, const PoseFitTolerances& tol) {
+  // Coinciding contacts (or particles) say nothing about rotation: keep R = I (minimal norm).
+  if (q.rms < tol.min_spread || p.rms < tol.min_spread) return {Mat3::Identity(), 3};
+  Mat3 H = Mat3::Zero();
+  for (size_t i = 0; i < w.size(); ++i) H += w[i] * q.offsets[i] * p.offsets[i].transpose();
+  H /= wsum;
+  Eigen::JacobiSVD<Mat3> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Mat3& U = svd.matrixU();
+  const Mat3& V = svd.matrixV();
+  const Vec3& s = svd.singularValues();
+  // sigma1 <= rms_q * rms_p (Cauchy-Schwarz), so this ratio is scale-free: ~0 means p is uncorrelated with q.
+  if (s(0) <= tol.line_ratio * q.rms * p.rms) return {Mat3::Identity(), 3};
+  // Reflection fix: a plain V U^T is a mirror when det(V U^T) = -1 (e.g. coplanar or mirrored data); the
+  // best proper rotation flips the axis of the smallest singular value instead.
+  double d = (V.determinant() * U.determinant()) < 0 ? -1.0 : 1.0;
+  // The rotation is unique iff sigma2 + d*sigma3 > 0. When it is ~0 (collinear contacts, whatever their
+  // count) every optimum maps u1 onto v1 and differs only by a twist about that line; the minimal-norm one
+  // is the shortest arc from u1 to v1.
+  if (s(1) + d * s(2) <= tol.line_ratio * s(0)) {
+    Quat arc = Quat::FromTwoVectors(U.col(0), V.col(0));
+    return {arc.normalized().toRotationMatrix(), 5};
+  }
+  Vec3 signs(1.0, 1.0, d);
+  return {V * signs.asDiagonal() * U.transpose(), 6};
+}
+
+}  // namespace
+
+RigidMotion RigidMotion::about(const Vec3& pivot, const Mat3& R, const Vec3& shift) {
+  RigidMotion m;
+  m.R = R;
+  m.pivot = pivot;
+  m.shift = shift;
+  m.t = pivot + shift - R * pivot;
+  return m;
+}
+
+RigidMotion fit_rigid_motion(const std::vector<Vec3>& from, const std::vector<Vec3>& to,
+                             const std::vector<double>& weights, const PoseFitTolerances& tolerances) {
+  check_inputs(from, to, weights);
+  std::vector<double> w = normalized_weights(weights, from.size());
+  double wsum = 0;
+  size_t anchor = 0;
+  for (size_t i = 0; i < w.size(); ++i) {
+    if (wsum == 0 && w[i] > 0) anchor = i;
+    wsum += w[i];
+  }
+  if (!(wsum > 0)) return RigidMotion::identity();  // no contacts, or none with weight: nothing moves
+  Centred q = centre(from, w, wsum, anchor);
+  Centred p = centre(to, w, wsum, anchor);
+  auto [R, dofs] = fit_rotation(q, p, w, wsum, tolerances);
+  // Anchors first: two nearby points 10 km out subtract exactly; adding the offsets' difference afterwards.
+  Vec3 shift = (p.anchor - q.anchor) + (p.mean_offset - q.mean_offset);
+  RigidMotion m = RigidMotion::about(q.centroid(), R, shift);
+  m.constrained_dofs = dofs;
+  return m;
+}
+
+Pose apply_motion(const RigidMotion& motion, const Pose& pose) {
+  return {motion.apply(pose.position), (Quat(motion.R) * pose.orientation).normalized()};
+}
+
+Vec3 rotation_vector(const Quat& q_in) {
+  Quat q = q_in.normalized();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();  // same rotation; picks the angle in [0, pi]
+  double s = q.vec().norm();
+  if (s == 0) return Vec3::Zero();
+  // atan2 keeps full relative accuracy for tiny angles, where acos(w) would lose half the digits.
+  double angle = 2.0 * std::atan2(s, q.w());
+  return q.vec() * (angle / s);
+}
+
+Vec3 rotation_vector(const Mat3& R) { return rotation_vector(Quat(R)); }
+
+BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_of_mass, double dt) {
+  validate::time_step(dt);
+  validate::finite(centre_of_mass, "centre_of_mass");
+  BodyVelocity v;
+  v.angular = rotation_vector(motion.R) / dt;
+  v.linear = motion.displacement(centre_of_mass) / dt;
+  return v;
+}
+
+}  // namespace handsim

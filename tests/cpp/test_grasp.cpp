@@ -1,0 +1,319 @@
+#include "grasp.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <random>
+
+using namespace handsim;
+
+namespace {
+
+bool brute_force(const std::vector<Vec3>& d, double c) {
+  for (size_t i = 0; i < d.size(); ++i)
+    for (size_t j = i + 1; j < d.size(); ++j)
+      if (d[i].dot(d[j]) < c) return true;
+  return false;
+}
+
+Vec3 random_unit(std::mt19937_64& gen) {
+  std::normal_distribution<double> n;
+  return Vec3(n(gen), n(gen), n(gen)).normalized();
+}
+
+// Directions within `half_angle` of `axis`.
+std::vector<Vec3> cone(std::mt19937_64& gen, const Vec3& axis, double half_angle, int n) {
+  std::uniform_real_distribution<double> u(0, 1);
+  Vec3 a = axis.normalized(), b = a.unitOrthogonal(), c = a.cross(b);
+  std::vector<Vec3> d;
+  for (int i = 0; i < n; ++i) {
+    double th = half_angle * std::sqrt(u(gen)), ph = 2 * M_PI * u(gen);
+    d.push_back(std::cos(th) * a + std::sin(th) * (std::cos(ph) * b + std::sin(ph) * c));
+  }
+  return d;
+}
+
+GraspInput frame(bool opposing, int contacts, bool tracked = true, double dt = 1.0 / 60) {
+  return {opposing, contacts, tracked, dt};
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------
+// opposing_contacts
+
+TEST(OpposingContacts, PinchFromOppositeSides) {
+  Vec3 thumb(1, 0, 0), index = Vec3(-1, 0.2, 0).normalized();
+  EXPECT_TRUE(opposing_contacts({thumb, index}));
+  EXPECT_TRUE(opposing_contacts({thumb, index}, kOpposingCos));
+  // ~100 degrees apart: opposing under the literal +0.7 reading only.
+  Vec3 side = Vec3(-0.17, 1, 0).normalized();
+  EXPECT_FALSE(opposing_contacts({thumb, side}));
+  EXPECT_TRUE(opposing_contacts({thumb, side}, kPaperLiteralCos));
+  // ~30 degrees apart: neither reading.
+  Vec3 near = Vec3(1, 0.58, 0).normalized();
+  EXPECT_FALSE(opposing_contacts({thumb, near}, kOpposingCos));
+  EXPECT_FALSE(opposing_contacts({thumb, near}, kPaperLiteralCos));
+}
+
+TEST(OpposingContacts, FewerThanTwoOrIdenticalNeverOppose) {
+  EXPECT_FALSE(opposing_contacts({}));
+  EXPECT_FALSE(opposing_contacts({Vec3::UnitX()}));
+  EXPECT_FALSE(opposing_contacts({Vec3::UnitX()}, 5.0));
+  EXPECT_FALSE(opposing_contacts(std::vector<Vec3>(100, Vec3::UnitZ()), kPaperLiteralCos));
+  EXPECT_TRUE(opposing_contacts({Vec3::UnitX(), Vec3::UnitX()}, 5.0));  // c > 1: any pair
+}
+
+TEST(OpposingContacts, MatchesBruteForceOnRandomSets) {
+  std::mt19937_64 gen(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  int agree = 0, positives = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    int n = 2 + int(u(gen) * 40);
+    std::vector<Vec3> d;
+    switch (trial % 3) {
+      case 0:  // anywhere on the sphere
+        for (int i = 0; i < n; ++i) d.push_back(random_unit(gen));
+        break;
+      case 1:  // a cone around the limit angle of the threshold
+        d = cone(gen, random_unit(gen), u(gen) * 1.6, n);
+        break;
+      default: {  // an arc of a great circle, slightly fuzzed: little for the pruning to work with
+        double span = u(gen) * M_PI * 1.1, fuzz = 0.05;
+        for (int i = 0; i < n; ++i) {
+          double lon = span * u(gen), lat = fuzz * (u(gen) - 0.5);
+          d.push_back(Vec3(std::cos(lat) * std::cos(lon), std::cos(lat) * std::sin(lon), std::sin(lat)));
+        }
+      }
+    }
+    for (double c : {-0.99, -0.7, 0.0, 0.7, 0.95}) {
+      bool expected = brute_force(d, c);
+      positives += expected;
+      agree += opposing_contacts(d, c) == expected;
+      ASSERT_EQ(opposing_contacts(d, c), expected) << "trial " << trial << " c " << c;
+    }
+  }
+  EXPECT_EQ(agree, 15000);
+  EXPECT_GT(positives, 1000);
+  EXPECT_LT(positives, 14000);
+}
+
+TEST(OpposingContacts, BoundaryPairsAreExact) {
+  // Pairs whose dot is a hair either side of c.
+  for (double c : {-0.7, 0.7}) {
+    double angle = std::acos(c);
+    for (double eps : {-1e-9, 1e-9}) {
+      Vec3 a = Vec3::UnitX();
+      Vec3 b(std::cos(angle + eps), std::sin(angle + eps), 0);
+      std::vector<Vec3> d{a, b};
+      EXPECT_EQ(opposing_contacts(d, c), brute_force(d, c)) << c << " " << eps;
+    }
+  }
+}
+
+TEST(OpposingContacts, ThousandsOfContactsAreFast) {
+  std::mt19937_64 gen(3);
+  std::vector<Vec3> push = cone(gen, Vec3(0, 1, 0), 1.0, 5000);  // one palm pushing: no grasp
+  std::vector<Vec3> grab = cone(gen, Vec3(0, 1, 0), 0.5, 2500);  // plus fingers from the other side
+  for (const Vec3& v : cone(gen, Vec3(0, -1, 0), 0.5, 2500)) grab.push_back(v);
+  auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < 20; ++k) {
+    EXPECT_FALSE(opposing_contacts(push));
+    EXPECT_TRUE(opposing_contacts(grab));
+  }
+  double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  // All-pairs would be 40 x 12.5M dot products (~0.5 s even optimised); the O(n) paths take ~20 ms.
+  EXPECT_LT(ms, 200.0);
+}
+
+TEST(OpposingContacts, RejectsNonUnitDirections) {
+  EXPECT_THROW(opposing_contacts({Vec3::UnitX(), Vec3(2, 0, 0)}), Error);
+  EXPECT_THROW(opposing_contacts({Vec3::UnitX(), Vec3(NAN, 0, 0)}), Error);
+  EXPECT_THROW(opposing_contacts({Vec3::UnitX(), Vec3::UnitY()}, NAN), Error);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// GraspTracker
+
+TEST(GraspTracker, GraspsAfterKConsecutiveFrames) {
+  GraspTracker t;  // k = 2
+  EXPECT_EQ(t.update(frame(true, 4)).type, GraspEventType::None);
+  EXPECT_FALSE(t.grasped());
+  GraspEvent e = t.update(frame(true, 4));
+  EXPECT_EQ(e.type, GraspEventType::GraspBegin);
+  EXPECT_TRUE(t.grasped());
+  EXPECT_EQ(t.update(frame(true, 4)).type, GraspEventType::None);  // one begin only
+}
+
+TEST(GraspTracker, DitheringConditionNeverGrasps) {
+  GraspTracker t;
+  for (int i = 0; i < 200; ++i) {
+    EXPECT_EQ(t.update(frame(i % 2 == 0, 3)).type, GraspEventType::None) << i;
+    EXPECT_FALSE(t.grasped());
+  }
+  // Nor does opposition seen by an untracked hand, or "opposing" with a single contact.
+  for (int i = 0; i < 10; ++i) t.update(frame(true, 3, false));
+  for (int i = 0; i < 10; ++i) t.update(frame(true, 1));
+  EXPECT_FALSE(t.grasped());
+}
+
+TEST(GraspTracker, ReleaseNeedsContactsGoneForMFrames) {
+  GraspTracker t;  // m = 3
+  t.update(frame(true, 4));
+  t.update(frame(true, 4));
+  ASSERT_TRUE(t.grasped());
+  // Opposition lost but contacts remain (fingers sliding): still held.
+  for (int i = 0; i < 20; ++i) EXPECT_EQ(t.update(frame(false, 2)).type, GraspEventType::None);
+  // Single frames and pairs of frames without contacts do not release.
+  for (int i = 0; i < 30; ++i) {
+    EXPECT_EQ(t.update(frame(false, i % 3 == 2 ? 1 : 0)).type, GraspEventType::None) << i;
+    EXPECT_TRUE(t.grasped());
+  }
+  EXPECT_EQ(t.update(frame(false, 0)).type, GraspEventType::None);
+  EXPECT_EQ(t.update(frame(false, 0)).type, GraspEventType::None);
+  GraspEvent e = t.update(frame(false, 0));
+  EXPECT_EQ(e.type, GraspEventType::GraspEnd);
+  EXPECT_EQ(e.reason, ReleaseReason::Released);
+  EXPECT_FALSE(e.zero_velocity);
+  EXPECT_FALSE(t.grasped());
+  // A new grasp needs a fresh streak.
+  EXPECT_EQ(t.update(frame(true, 4)).type, GraspEventType::None);
+  EXPECT_EQ(t.update(frame(true, 4)).type, GraspEventType::GraspBegin);
+}
+
+TEST(GraspTracker, ShortTrackingLossKeepsGrasp) {
+  GraspTracker t;
+  t.update(frame(true, 4));
+  t.update(frame(true, 4));
+  for (int i = 0; i < 5; ++i) {
+    EXPECT_EQ(t.update(frame(false, 0, false)).type, GraspEventType::None);  // stale 0 contacts ignored
+    EXPECT_TRUE(t.grasped());
+  }
+  EXPECT_NEAR(t.untracked_time(), 5.0 / 60, 1e-12);
+  t.update(frame(false, 3, true));
+  EXPECT_TRUE(t.grasped());
+  EXPECT_EQ(t.untracked_time(), 0.0);
+  // Repeated short losses do not add up.
+  for (int r = 0; r < 10; ++r) {
+    for (int i = 0; i < 10; ++i) t.update(frame(false, 0, false));
+    t.update(frame(false, 3, true));
+  }
+  EXPECT_TRUE(t.grasped());
+}
+
+TEST(GraspTracker, LongTrackingLossReleasesWithZeroVelocity) {
+  GraspTracker t;
+  t.update(frame(true, 4));
+  t.update(frame(true, 4));
+  int released_at = -1;
+  GraspEvent end;
+  for (int i = 0; i < 60; ++i) {
+    GraspEvent e = t.update(frame(true, 4, false));
+    if (e.type == GraspEventType::GraspEnd) released_at = i, end = e;
+  }
+  EXPECT_FALSE(t.grasped());
+  EXPECT_EQ(end.reason, ReleaseReason::TrackingLost);
+  EXPECT_TRUE(end.zero_velocity);
+  // Released on the first frame beyond the 0.2 s grace: frame 13 of 60 Hz (0.2167 s).
+  EXPECT_EQ(released_at, 12);
+}
+
+TEST(GraspTracker, RejectsBadInputAndSettings) {
+  GraspTracker t;
+  EXPECT_THROW(t.update(frame(true, 2, true, 0.0)), Error);
+  EXPECT_THROW(t.update(frame(true, -1)), Error);
+  GraspSettings s;
+  s.frames_to_grasp = 0;
+  EXPECT_THROW(GraspTracker{s}, Error);
+  s = {};
+  s.tracking_grace_s = -1;
+  EXPECT_THROW(GraspTracker{s}, Error);
+  s = {};
+  s.velocity_window = 1;
+  EXPECT_THROW(validate_grasp_settings(s), Error);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// HandMotionHistory
+
+namespace {
+
+// Constant linear velocity of the palm and constant world-frame angular velocity of its orientation.
+struct ConstantMotion {
+  Vec3 p0{0.1, 1.2, -0.3}, v{0.8, -0.3, 1.5}, w{2.0, -1.0, 3.5};
+  Quat q0 = Quat(Eigen::AngleAxisd(0.7, Vec3(1, 1, 0).normalized()));
+  Pose at(double t) const {
+    Quat q = Quat(Eigen::AngleAxisd(w.norm() * t, w.normalized())) * q0;
+    return {p0 + v * t, q};
+  }
+};
+
+}  // namespace
+
+TEST(HandMotionHistory, RecoversConstantMotionExactly) {
+  ConstantMotion m;
+  HandMotionHistory h(4);
+  double t0 = 1000.0, dt = 1.0 / 60;
+  for (int k = 0; k < 10; ++k) h.push(m.at(k * dt), t0 + k * dt);
+  EXPECT_EQ(h.size(), 4);
+  EXPECT_LE((h.linear_velocity() - m.v).norm(), 1e-9);
+  EXPECT_LE((h.angular_velocity() - m.w).norm(), 1e-9);
+  // A point attached to the palm: x(t) = p(t) + R(t) r. Its derivative at the newest sample, by a central
+  // difference of the true trajectory, is what the released object should get.
+  double tn = 9 * dt;
+  Vec3 r_local(0.05, -0.02, 0.1);
+  Vec3 x = m.at(tn).transform(r_local);
+  double h_fd = 1e-6;
+  Vec3 v_true = (m.at(tn + h_fd).transform(r_local) - m.at(tn - h_fd).transform(r_local)) / (2 * h_fd);
+  EXPECT_LE((h.point_velocity(x) - v_true).norm(), 1e-7);  // limited by the finite difference
+  EXPECT_LE((h.point_velocity(x) - (m.v + m.w.cross(x - m.at(tn).position))).norm(), 1e-9);
+  BodyVelocity b = h.attached_body_velocity(x);
+  EXPECT_EQ(b.linear, h.point_velocity(x));
+  EXPECT_EQ(b.angular, h.angular_velocity());
+}
+
+TEST(HandMotionHistory, IrregularTimestampsStillExact) {
+  ConstantMotion m;
+  HandMotionHistory h(5);
+  double t = 0;
+  for (double dt : {0.016, 0.017, 0.011, 0.033, 0.016, 0.02}) {
+    t += dt;
+    h.push(m.at(t), t);
+  }
+  EXPECT_LE((h.linear_velocity() - m.v).norm(), 1e-9);
+  EXPECT_LE((h.angular_velocity() - m.w).norm(), 1e-9);
+}
+
+TEST(HandMotionHistory, SingleJitteryFrameHurtsLessThanFiniteDifference) {
+  ConstantMotion m;
+  m.w.setZero();
+  double dt = 1.0 / 60;
+  Vec3 jitter(0.005, 0, 0);  // 5 mm tracking glitch on the newest frame
+  HandMotionHistory h(4), two(2);
+  for (int k = 0; k < 4; ++k) {
+    Pose p = m.at(k * dt);
+    if (k == 3) p.position += jitter;
+    h.push(p, k * dt);
+    two.push(p, k * dt);
+  }
+  double err_lsq = (h.linear_velocity() - m.v).norm(), err_fd = (two.linear_velocity() - m.v).norm();
+  EXPECT_NEAR(err_fd, jitter.norm() / dt, 1e-9);
+  EXPECT_NEAR(err_lsq, 0.3 * jitter.norm() / dt, 1e-9);  // 1.5 dt / (5 dt^2) of the glitch
+}
+
+TEST(HandMotionHistory, TooFewSamplesGiveZeroAndBadInputThrows) {
+  HandMotionHistory h;
+  EXPECT_EQ(h.window(), 4);
+  EXPECT_EQ(h.linear_velocity(), Vec3::Zero());
+  h.push(Pose{}, 0.0);
+  EXPECT_FALSE(h.has_velocity());
+  EXPECT_EQ(h.angular_velocity(), Vec3::Zero());
+  EXPECT_EQ(h.point_velocity(Vec3(1, 2, 3)), Vec3::Zero());
+  EXPECT_THROW(h.push(Pose{}, 0.0), Error);  // time must increase
+  EXPECT_THROW(h.push(Pose{Vec3(NAN, 0, 0), Quat::Identity()}, 1.0), Error);
+  EXPECT_THROW(HandMotionHistory(1), Error);
+  EXPECT_EQ(h.size(), 1);
+  h.clear();
+  EXPECT_EQ(h.size(), 0);
+}
