@@ -61,10 +61,15 @@ int BulletParticleCollider::add_body(const ShapeDef& s, const Pose& pose) {
   validate_shape(s, "shape");
   std::unique_ptr<btCollisionShape> shape;
   switch (s.type) {
-    case ShapeType::Box:
-      shape = std::make_unique<btBoxShape>(btVector3(btScalar(s.half_extents.x()), btScalar(s.half_extents.y()),
-                                                     btScalar(s.half_extents.z())));
+    case ShapeType::Box: {
+      auto box = std::make_unique<btBoxShape>(btVector3(btScalar(s.half_extents.x()), btScalar(s.half_extents.y()),
+                                                        btScalar(s.half_extents.z())));
+      // Bullet's default margin rounds the box edges (radius up to 10% of the smallest half extent);
+      // without a margin the sphere-box algorithm is the exact closed form.
+      box->setMargin(0);
+      shape = std::move(box);
       break;
+    }
     case ShapeType::Sphere: shape = std::make_unique<btSphereShape>(btScalar(s.radius)); break;
     case ShapeType::Capsule:
       shape = std::make_unique<btCapsuleShape>(btScalar(s.radius), btScalar(2 * s.half_height));

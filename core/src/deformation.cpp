@@ -45,11 +45,21 @@ void build_falloff(HandModel& model) {
 }
 
 void apply_render_deformation(const HandModel& model, const HandState& state, Eigen::Matrix3Xd& out) {
+  if (state.displaced.empty()) return;
+  // Normalized over the displaced neighbours only: an undisplaced neighbour sits outside the object, so
+  // averaging it in would pull a pressed vertex back inside. The displacement stays continuous because a
+  // particle that barely penetrates is barely displaced.
+  std::vector<double> wsum(model.vertex_count(), 0.0);
+  Eigen::Matrix3Xd acc = Eigen::Matrix3Xd::Zero(3, model.vertex_count());
   for (int p : state.displaced) {
     Vec3 d = state.deformed_positions.col(p) - state.tracked_positions.col(p);
-    for (int e = model.falloff_begin[p]; e < model.falloff_begin[p + 1]; ++e)
-      out.col(model.falloff_vertex[e]) += model.falloff_weight[e] * d;
+    for (int e = model.falloff_begin[p]; e < model.falloff_begin[p + 1]; ++e) {
+      acc.col(model.falloff_vertex[e]) += model.falloff_weight[e] * d;
+      wsum[model.falloff_vertex[e]] += model.falloff_weight[e];
+    }
   }
+  for (int v = 0; v < model.vertex_count(); ++v)
+    if (wsum[v] > 0) out.col(v) += acc.col(v) / wsum[v];
 }
 
 void deform_particles(const HandModel& model, HandState& state, const std::vector<ParticleContact>& contacts) {

@@ -87,7 +87,7 @@ HandModel assemble(const HandDef& def, const SkinnedMesh& source, const std::vec
   double area = candidate_area(m.mesh, m.exposed);
   m.particle_spacing = std::sqrt(2 * area / (std::sqrt(3.0) * std::max(np, 1)));
   m.particle_radius = def.particle_radius > 0 ? def.particle_radius : m.particle_spacing / std::sqrt(3.0);
-  m.falloff_radius = 1.5 * m.particle_spacing;
+  m.falloff_radius = 2.0 * m.particle_spacing;  // reaches past the largest gaps of random sampling
   build_falloff(m);
   return m;
 }
