@@ -1,0 +1,246 @@
+// Closed-form particle contacts: the default narrow phase. Each centre is taken into the body frame, the
+// signed distance to the shape and the closest surface point are computed there, and results go back to world.
+#include "handsim/hand.h"
+
+#include "validate.h"
+
+#include <LinearMath/btConvexHullComputer.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace handsim {
+namespace {
+
+// Signed distance of a local point to a shape, with the closest surface point and the outward normal there.
+struct Closest {
+  double sd;
+  Vec3 point, normal;
+};
+
+Closest box_closest(const Vec3& l, const Vec3& h) {
+  Vec3 q = l.cwiseAbs() - h;
+  if ((q.array() > 0).any()) {
+    Vec3 c = l.cwiseMax(-h).cwiseMin(h);
+    Vec3 d = l - c;
+    double n = d.norm();
+    return {n, c, d / n};
+  }
+  // Inside: the face of least penetration (largest q); ties pick the lowest axis.
+  int k = 0;
+  for (int i = 1; i < 3; ++i)
+    if (q[i] > q[k]) k = i;
+  double s = l[k] >= 0 ? 1.0 : -1.0;
+  Vec3 c = l;
+  c[k] = s * h[k];
+  Vec3 n = Vec3::Zero();
+  n[k] = s;
+  return {q[k], c, n};
+}
+
+Closest sphere_closest(const Vec3& l, double r, const Vec3& fallback) {
+  double d = l.norm();
+  Vec3 n = d > 1e-12 ? Vec3(l / d) : fallback;  // the centre itself: any direction is right, pick a fixed one
+  return {d - r, r * n, n};
+}
+
+Closest capsule_closest(const Vec3& l, double r, double hh) {
+  Vec3 axis(0, std::clamp(l.y(), -hh, hh), 0);
+  Vec3 v = l - axis;
+  double d = v.norm();
+  Vec3 n;
+  if (d > 1e-12) n = v / d;
+  else if (std::abs(l.y()) < hh) n = Vec3::UnitX();    // on the axis inside the core: any radial direction
+  else n = Vec3(0, l.y() >= 0 ? 1.0 : -1.0, 0);  // at a cap centre: along the axis
+  return {d - r, axis + r * n, n};
+}
+
+// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  Vec3 ab = b - a, ac = c - a, ap = p - a;
+  double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  Vec3 bp = p - b;
+  double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  Vec3 cp = p - c;
+  double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  double denom = 1 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// Nearest point over a triangle list (brute force with per-triangle bounds culling when given).
+bool nearest_on_triangles(const Vec3& l, const std::vector<Vec3>& v, const std::vector<int>& tri, double reach,
+                          const std::vector<Vec3>* lo, const std::vector<Vec3>* hi, Vec3& best_point,
+                          int& best_tri) {
+  double best = reach * reach;
+  best_tri = -1;
+  for (size_t t = 0; t < tri.size() / 3; ++t) {
+    if (lo && ((l.array() < (*lo)[t].array() - reach).any() || (l.array() > (*hi)[t].array() + reach).any()))
+      continue;
+    Vec3 c = closest_on_triangle(l, v[tri[3 * t]], v[tri[3 * t + 1]], v[tri[3 * t + 2]]);
+    double d2 = (l - c).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      best_point = c;
+      best_tri = int(t);
+    }
+  }
+  return best_tri >= 0;
+}
+
+// Returns false when the centre is farther than `radius` from the shape (no contact possible).
+bool closest_on_shape(const PreparedShape& ps, const Vec3& l, double radius, Closest& out) {
+  const ShapeDef& s = ps.shape;
+  switch (s.type) {
+    case ShapeType::Box: out = box_closest(l, s.half_extents); return true;
+    case ShapeType::Sphere: out = sphere_closest(l, s.radius, Vec3::UnitY()); return true;
+    case ShapeType::Capsule: out = capsule_closest(l, s.radius, s.half_height); return true;
+    case ShapeType::ConvexHull: {
+      // Inside a convex polytope the distance to the boundary is the distance to the nearest face plane.
+      double sd = -1e300;
+      int k = 0;
+      for (size_t i = 0; i < ps.planes.size(); ++i) {
+        double d = ps.planes[i].head<3>().dot(l) - ps.planes[i][3];
+        if (d > sd) {
+          sd = d;
+          k = int(i);
+        }
+      }
+      if (sd >= radius) return false;  // the plane distance bounds the true distance from below
+      if (sd <= 0) {
+        Vec3 n = ps.planes[k].head<3>();
+        out = {sd, l - sd * n, n};
+        return true;
+      }
+      Vec3 c;
+      int t;
+      if (!nearest_on_triangles(l, ps.hull_vertices, ps.hull_triangles, radius, nullptr, nullptr, c, t)) return false;
+      double d = (l - c).norm();
+      out = {d, c, d > 1e-12 ? Vec3((l - c) / d) : Vec3(ps.planes[k].head<3>())};
+      return true;
+    }
+    case ShapeType::TriangleMesh: {
+      Vec3 c;
+      int t;
+      if (!nearest_on_triangles(l, s.points, s.indices, radius, &ps.tri_lo, &ps.tri_hi, c, t)) return false;
+      double d = (l - c).norm();
+      Vec3 n;
+      if (d > 1e-12) {
+        n = (l - c) / d;
+      } else {
+        const Vec3 &a = s.points[s.indices[3 * t]], &b = s.points[s.indices[3 * t + 1]],
+                   &e = s.points[s.indices[3 * t + 2]];
+        n = (b - a).cross(e - a).normalized();
+      }
+      out = {d, c, n};
+      return true;
+    }
+  }
+  return false;
+}
+
+void prepare_hull(PreparedShape& ps) {
+  const auto& pts = ps.shape.points;
+  std::vector<double> coords;
+  for (const Vec3& p : pts) coords.insert(coords.end(), {p.x(), p.y(), p.z()});
+  btConvexHullComputer hc;
+  hc.compute(coords.data(), 3 * sizeof(double), int(pts.size()), 0, 0);
+  // Bullet returns the hull vertices in single precision: map each back to the exact input point.
+  std::vector<int> exact(hc.vertices.size());
+  for (int i = 0; i < hc.vertices.size(); ++i) {
+    Vec3 v(hc.vertices[i].x(), hc.vertices[i].y(), hc.vertices[i].z());
+    double best = 1e300;
+    for (size_t j = 0; j < pts.size(); ++j) {
+      double d = (pts[j] - v).squaredNorm();
+      if (d < best) {
+        best = d;
+        exact[i] = int(j);
+      }
+    }
+    ps.hull_vertices.push_back(pts[exact[i]]);
+  }
+  for (int f = 0; f < hc.faces.size(); ++f) {
+    std::vector<int> poly;
+    const btConvexHullComputer::Edge* start = &hc.edges[hc.faces[f]];
+    const btConvexHullComputer::Edge* e = start;
+    do {
+      poly.push_back(e->getSourceVertex());
+      e = e->getNextEdgeOfFace();
+    } while (e != start);
+    // Newell's normal of the (counter-clockwise from outside) polygon, offset through its vertices.
+    Vec3 n = Vec3::Zero(), centroid = Vec3::Zero();
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const Vec3 &a = ps.hull_vertices[poly[i]], &b = ps.hull_vertices[poly[(i + 1) % poly.size()]];
+      n += Vec3((a.y() - b.y()) * (a.z() + b.z()), (a.z() - b.z()) * (a.x() + b.x()), (a.x() - b.x()) * (a.y() + b.y()));
+      centroid += a;
+    }
+    if (n.norm() < 1e-15) continue;
+    n.normalize();
+    centroid /= double(poly.size());
+    double d = -1e300;
+    for (int v : poly) d = std::max(d, n.dot(ps.hull_vertices[v]));
+    ps.planes.push_back(Eigen::Vector4d(n.x(), n.y(), n.z(), d));
+    for (size_t i = 1; i + 1 < poly.size(); ++i) ps.hull_triangles.insert(ps.hull_triangles.end(), {poly[0], poly[i], poly[i + 1]});
+  }
+  if (ps.planes.size() < 4) validate::fail("shape.points", "the convex hull is flat (needs a volume)");
+}
+
+}  // namespace
+
+PreparedShape prepare_shape(const ShapeDef& shape, const std::string& argument) {
+  validate_shape(shape, argument);
+  PreparedShape ps;
+  ps.shape = shape;
+  shape_local_bounds(shape, ps.local_lo, ps.local_hi);
+  if (shape.type == ShapeType::ConvexHull) prepare_hull(ps);
+  if (shape.type == ShapeType::TriangleMesh) {
+    for (size_t t = 0; t < shape.indices.size(); t += 3) {
+      const Vec3 &a = shape.points[shape.indices[t]], &b = shape.points[shape.indices[t + 1]],
+                 &c = shape.points[shape.indices[t + 2]];
+      ps.tri_lo.push_back(a.cwiseMin(b).cwiseMin(c));
+      ps.tri_hi.push_back(a.cwiseMax(b).cwiseMax(c));
+    }
+  }
+  return ps;
+}
+
+void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& ps,
+                       const Pose& body_pose, std::vector<ParticleContact>& out) {
+  validate::non_negative(radius, "radius");
+  const Mat3 R = body_pose.orientation.normalized().toRotationMatrix();
+  const Vec3 lo = ps.local_lo.array() - radius, hi = ps.local_hi.array() + radius;
+  for (Eigen::Index i = 0; i < centres.cols(); ++i) {
+    const Vec3 l = R.transpose() * (centres.col(i) - body_pose.position);
+    if ((l.array() < lo.array()).any() || (l.array() > hi.array()).any()) continue;  // cheap local bounds test
+    Closest c;
+    if (!closest_on_shape(ps, l, radius, c)) continue;
+    double depth = radius - c.sd;
+    if (depth <= 0) continue;
+    out.push_back({int(i), R * c.point + body_pose.position, R * c.normal, depth});
+  }
+}
+
+void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const ShapeDef& shape,
+                       const Pose& body_pose, std::vector<ParticleContact>& out) {
+  collide_particles(centres, radius, prepare_shape(shape), body_pose, out);
+}
+
+void shape_world_bounds(const ShapeDef& shape, const Pose& pose, Vec3& lo, Vec3& hi) {
+  Vec3 llo, lhi;
+  shape_local_bounds(shape, llo, lhi);
+  const Mat3 R = pose.orientation.normalized().toRotationMatrix();
+  Vec3 c = pose.transform(0.5 * (llo + lhi));
+  Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
+  lo = c - e;
+  hi = c + e;
+}
+
+}  // namespace handsim

@@ -1,0 +1,199 @@
+// Synthetic OpenXR hand frames. The hand is built as a right hand in the palm's local frame (palm joint at
+// the origin, fingers along -Z, back of the hand +Y, thumb on -X), mirrored for the left hand, then placed at
+// the palm pose. Dimensions are those of an adult hand at scale 1.
+#include "handsim/hand.h"
+
+#include "validate.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace handsim {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+struct FingerSpec {
+  int first_joint;               // metacarpal joint index
+  Vec3 base;                     // metacarpal joint (carpometacarpal), palm frame, right hand
+  Vec3 knuckle;                  // proximal joint (MCP)
+  std::array<double, 3> length;  // proximal, intermediate, distal (to the tip joint)
+  std::array<double, 5> radius;  // metacarpal, proximal, intermediate, distal, tip
+  double spread_deg;             // rotation about +Y at spread 1 (positive: towards the thumb)
+};
+
+// Knuckles span 6.4 cm centre to centre, so the palm with its skin is ~8.4 cm wide; the middle finger is
+// 4.0 + 2.3 + 1.8 = 8.1 cm from its knuckle to its tip joint.
+const FingerSpec kFingers[4] = {
+    {kIndexMetacarpal, {-0.012, 0.0, 0.035}, {-0.024, 0.0, -0.043}, {0.036, 0.021, 0.017},
+     {0.0110, 0.0100, 0.0090, 0.0082, 0.0078}, 9.0},
+    {kMiddleMetacarpal, {-0.002, 0.0, 0.035}, {0.000, 0.0, -0.045}, {0.040, 0.023, 0.018},
+     {0.0110, 0.0105, 0.0093, 0.0085, 0.0080}, 0.0},
+    {kRingMetacarpal, {0.010, 0.0, 0.035}, {0.021, 0.0, -0.042}, {0.037, 0.023, 0.018},
+     {0.0105, 0.0100, 0.0090, 0.0082, 0.0078}, -7.0},
+    {kLittleMetacarpal, {0.020, 0.0, 0.033}, {0.040, 0.0, -0.037}, {0.029, 0.017, 0.016},
+     {0.0100, 0.0090, 0.0083, 0.0078, 0.0073}, -15.0},
+};
+// Flexion at curl 1 (MCP, PIP, DIP): a closed fist.
+constexpr double kFingerFlexDeg[3] = {90.0, 105.0, 70.0};
+
+// Thumb: carpometacarpal joint near the wrist, slightly on the palm side.
+const Vec3 kThumbBase(-0.022, -0.008, 0.030);
+const Vec3 kThumbDir(-0.55, -0.12, -0.83);   // metacarpal direction of the relaxed flat thumb
+const Vec3 kThumbNail(-0.7, 0.7, 0.0);       // the thumb nail faces outwards and up
+constexpr double kThumbLength[3] = {0.044, 0.032, 0.026};  // metacarpal, proximal, distal
+constexpr double kThumbRadius[4] = {0.0125, 0.0105, 0.0095, 0.0085};
+constexpr double kThumbFlexDeg[3] = {20.0, 55.0, 75.0};   // CMC, MCP, IP at curl 1
+constexpr double kThumbAbductDeg = 50.0;                  // swing under the palm at opposition 1
+
+// Joint orientation from the bone direction and the flexion axis: -Z along the bone, X = flexion axis
+// (orthogonalized), Y = Z x X is then the back of the bone, right-handed.
+Quat joint_orientation(const Vec3& bone_dir, const Vec3& flex_axis) {
+  Vec3 z = -bone_dir.normalized();
+  Vec3 x = (flex_axis - flex_axis.dot(z) * z).normalized();
+  Mat3 m;
+  m.col(0) = x;
+  m.col(1) = z.cross(x);
+  m.col(2) = z;
+  return Quat(m).normalized();
+}
+
+void set_joint(HandFrame& f, int j, const Vec3& p, const Vec3& dir, const Vec3& axis, double r) {
+  f.joints[j].position = p;
+  f.joints[j].orientation = joint_orientation(dir, axis);
+  f.joints[j].radius = r;
+  f.joints[j].valid = true;
+}
+
+// Flexion turns the bone towards the palm side: a rotation about the flexion axis by -angle
+// (about +X by +angle would turn -Z towards +Y, the back of the hand).
+Quat flexion(const Vec3& axis, double angle) { return Quat(Eigen::AngleAxisd(-angle, axis.normalized())); }
+
+void build_finger(const FingerSpec& fs, double curl, double spread, double s, HandFrame& f) {
+  Vec3 base = s * fs.base, knuckle = s * fs.knuckle;
+  set_joint(f, fs.first_joint, base, knuckle - base, Vec3::UnitX(), s * fs.radius[0]);
+  Quat spread_q(Eigen::AngleAxisd(fs.spread_deg * kDeg * spread, Vec3::UnitY()));
+  Vec3 dir = spread_q * -Vec3::UnitZ();
+  Vec3 axis = spread_q * Vec3::UnitX();
+  Vec3 p = knuckle;
+  for (int k = 0; k < 3; ++k) {
+    dir = flexion(axis, curl * kFingerFlexDeg[k] * kDeg) * dir;
+    set_joint(f, fs.first_joint + 1 + k, p, dir, axis, s * fs.radius[1 + k]);
+    p += s * fs.length[k] * dir;
+  }
+  set_joint(f, fs.first_joint + 4, p, dir, axis, s * fs.radius[4]);
+}
+
+// The thumb chain for given flexion angles and abduction (swing about the palm's Z axis under the palm).
+void build_thumb_chain(const std::array<double, 3>& flex, double abduct, double s, HandFrame& f) {
+  Quat ab(Eigen::AngleAxisd(abduct, Vec3::UnitZ()));  // +Z rotation turns -X towards -Y: under the palm
+  Vec3 dir = ab * kThumbDir.normalized();
+  Vec3 nail = ab * kThumbNail;
+  Vec3 axis = nail.cross(-dir);  // X = Y x Z
+  Vec3 p = s * kThumbBase;
+  for (int k = 0; k < 3; ++k) {
+    dir = flexion(axis, flex[k]) * dir;
+    set_joint(f, kThumbMetacarpal + k, p, dir, axis, s * kThumbRadius[k]);
+    p += s * kThumbLength[k] * dir;
+  }
+  set_joint(f, kThumbTip, p, dir, axis, s * kThumbRadius[3]);
+}
+
+// Rigid rotation of the thumb joints about its carpometacarpal joint.
+void rotate_thumb(const Quat& q, HandFrame& f) {
+  Vec3 c = f.joints[kThumbMetacarpal].position;
+  for (int j = kThumbMetacarpal; j <= kThumbTip; ++j) {
+    f.joints[j].position = c + q * (f.joints[j].position - c);
+    f.joints[j].orientation = (q * f.joints[j].orientation).normalized();
+  }
+}
+
+// Thumb: curl flexes it across the palm; opposition swings it under the palm, flexes it just enough for its tip
+// to reach the pad of the index tip (bisection on the distance from its base), then turns it onto that point.
+void build_thumb(double curl, double opposition, double s, HandFrame& f) {
+  auto flex_at = [](double lambda) {
+    return std::array<double, 3>{kThumbFlexDeg[0] * kDeg * lambda, kThumbFlexDeg[1] * kDeg * lambda,
+                                 kThumbFlexDeg[2] * kDeg * lambda};
+  };
+  double abduct = opposition * kThumbAbductDeg * kDeg;
+  if (opposition <= 0) {
+    build_thumb_chain(flex_at(curl), 0.0, s, f);
+    return;
+  }
+  // Where the thumb tip centre sits when the two pads touch.
+  const JointPose& it = f.joints[kIndexTip];
+  Vec3 target = it.position - (it.radius + s * kThumbRadius[3]) * (it.orientation * Vec3::UnitY());
+  Vec3 base = s * kThumbBase;
+  double want = (target - base).norm();
+  // Distance base->tip falls monotonically with flexion over [0, 1.3] (total bend stays below 180 degrees).
+  double lo = 0, hi = 1.3;
+  for (int it_count = 0; it_count < 50; ++it_count) {
+    double mid = 0.5 * (lo + hi);
+    build_thumb_chain(flex_at(mid), abduct, s, f);
+    ((f.joints[kThumbTip].position - base).norm() > want ? lo : hi) = mid;
+  }
+  double lambda = (1 - opposition) * curl + opposition * 0.5 * (lo + hi);
+  build_thumb_chain(flex_at(lambda), abduct, s, f);
+  Vec3 tip = f.joints[kThumbTip].position - base;
+  Quat swing = Quat::FromTwoVectors(tip, target - base);
+  rotate_thumb(Quat::Identity().slerp(opposition, swing), f);
+}
+
+// Mirror x -> -x. For a frame R (a rotation), M R M with M = diag(-1, 1, 1) is again a rotation whose Y and Z
+// axes are the mirrored Y and Z axes: the quaternion (x, y, z, w) becomes (x, -y, -z, w).
+void mirror(HandFrame& f) {
+  for (JointPose& j : f.joints) {
+    j.position.x() = -j.position.x();
+    j.orientation = Quat(j.orientation.w(), j.orientation.x(), -j.orientation.y(), -j.orientation.z());
+  }
+}
+
+}  // namespace
+
+HandFrame make_hand_frame(Handedness handedness, const Pose& palm_pose, const HandPoseParams& params) {
+  if (handedness != Handedness::Left && handedness != Handedness::Right)
+    validate::fail("handedness", "must be Left or Right");
+  Pose palm = validate::pose(palm_pose, "palm_pose");
+  for (int i = 0; i < 5; ++i) validate::finite(params.curl[i], "params.curl[" + std::to_string(i) + "]");
+  validate::finite(params.thumb_opposition, "params.thumb_opposition");
+  validate::finite(params.spread, "params.spread");
+  validate::positive(params.scale, "params.scale");
+  const double s = params.scale;
+
+  HandFrame f;
+  f.handedness = Handedness::Right;
+  set_joint(f, kPalm, Vec3::Zero(), -Vec3::UnitZ(), Vec3::UnitX(), s * 0.013);
+  set_joint(f, kWrist, Vec3(0, 0, s * 0.045), -Vec3::UnitZ(), Vec3::UnitX(), s * 0.014);
+  for (int k = 0; k < 4; ++k)
+    build_finger(kFingers[k], std::clamp(params.curl[k + 1], 0.0, 1.0), params.spread, s, f);
+  build_thumb(std::clamp(params.curl[0], 0.0, 1.0), std::clamp(params.thumb_opposition, 0.0, 1.0), s, f);
+
+  if (handedness == Handedness::Left) mirror(f);
+  f.handedness = handedness;
+  for (JointPose& j : f.joints) {
+    j.position = palm.transform(j.position);
+    j.orientation = (palm.orientation * j.orientation).normalized();
+  }
+  return f;
+}
+
+HandFrame bind_frame(Handedness handedness, double scale) {
+  HandPoseParams p;
+  p.scale = scale;
+  return make_hand_frame(handedness, Pose{}, p);
+}
+
+void validate_frame(const HandFrame& frame, const std::string& argument) {
+  if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right)
+    validate::fail(argument + ".handedness", "must be Left or Right");
+  for (int j = 0; j < kHandJointCount; ++j) {
+    const JointPose& jp = frame.joints[j];
+    if (!jp.valid) continue;  // untracked joints may hold anything
+    std::string name = argument + ".joints[" + std::to_string(j) + "]";
+    validate::finite(jp.position, name + ".position");
+    validate::unit_quat(jp.orientation, name + ".orientation");
+    validate::non_negative(jp.radius, name + ".radius");
+  }
+}
+
+}  // namespace handsim

@@ -1,0 +1,162 @@
+#include "skinning.h"
+
+#include <algorithm>
+#include <map>
+
+namespace handsim {
+namespace {
+
+// The joint whose bone leads to joint j: the previous joint in the chain, the wrist for metacarpals.
+int parent_of(int j) {
+  if (j == kPalm) return kWrist;
+  if (j == kWrist) return -1;
+  if (j == kThumbMetacarpal || j == kIndexMetacarpal || j == kMiddleMetacarpal || j == kRingMetacarpal ||
+      j == kLittleMetacarpal)
+    return kWrist;
+  return j - 1;
+}
+
+BoneTransform to_matrix(const Pose& p) {
+  BoneTransform m;
+  m.leftCols<3>() = p.orientation.toRotationMatrix();
+  m.col(3) = p.position;
+  return m;
+}
+
+}  // namespace
+
+void compute_bone_transforms(const HandModel& model, const HandFrame& frame,
+                             std::array<BoneTransform, kHandJointCount>& bones) {
+  // Parents come before children in OpenXR order except the palm (parent: wrist), so do the wrist first.
+  std::array<bool, kHandJointCount> done{};
+  auto compute = [&](int j) {
+    const JointPose& jp = frame.joints[j];
+    if (jp.valid) {
+      Pose current{jp.position, jp.orientation.normalized()};
+      bones[j] = to_matrix(current * model.bind_inverse[j]);
+    } else {
+      // Rigidly attached to the parent: pose_j = pose_p * bind_p^-1 * bind_j, so B_j = B_p.
+      bones[j] = bones[parent_of(j)];
+    }
+    done[j] = true;
+  };
+  compute(kWrist);
+  for (int j = 0; j < kHandJointCount; ++j)
+    if (!done[j]) compute(j);
+}
+
+void skin_points(const Eigen::Matrix3Xd& bind, const Eigen::Matrix<int, 4, Eigen::Dynamic>& bone_ids,
+                 const Eigen::Matrix4Xd& weights, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out) {
+  const Eigen::Index n = bind.cols();
+  out.resize(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::Vector4d h(bind(0, i), bind(1, i), bind(2, i), 1.0);
+    Vec3 v = Vec3::Zero();
+    for (int k = 0; k < 4; ++k) {
+      double w = weights(k, i);
+      if (w != 0) v += w * (bones[bone_ids(k, i)] * h);
+    }
+    out.col(i) = v;
+  }
+}
+
+std::vector<int> build_skin_groups(const SkinnedMesh& mesh, HandModel& model) {
+  const int n = int(mesh.positions.cols());
+  // Key: the vertex's bones with non-zero weight, ascending.
+  std::vector<std::array<int, 4>> key(n);
+  std::vector<std::array<double, 4>> w(n);
+  std::vector<int> count(n);
+  for (int i = 0; i < n; ++i) {
+    std::array<std::pair<int, double>, 4> inf;
+    int c = 0;
+    for (int k = 0; k < 4; ++k)
+      if (mesh.weights(k, i) > 0) inf[c++] = {mesh.bones(k, i), mesh.weights(k, i)};
+    std::sort(inf.begin(), inf.begin() + c);
+    // The same bone twice: merge its weights so each group slot is a distinct bone.
+    int m = 0;
+    for (int k = 0; k < c; ++k) {
+      if (m > 0 && inf[m - 1].first == inf[k].first) inf[m - 1].second += inf[k].second;
+      else inf[m++] = inf[k];
+    }
+    key[i].fill(-1);
+    w[i].fill(0);
+    double sum = 0;
+    for (int k = 0; k < m; ++k) sum += inf[k].second;
+    for (int k = 0; k < m; ++k) {
+      key[i][k] = inf[k].first;
+      w[i][k] = inf[k].second / sum;  // validated to be ~1; exact 1 keeps the bind pose exact
+    }
+    count[i] = m;
+  }
+  std::vector<int> order(n);
+  for (int i = 0; i < n; ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
+
+  model.groups.clear();
+  for (auto& a : model.bind_xyz) a.resize(n);
+  for (auto& a : model.group_weight) a.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    int v = order[i];
+    if (model.groups.empty() || key[order[i - 1]] != key[v]) {
+      SkinGroup g;
+      g.begin = i;
+      g.count = std::max(count[v], 1);
+      for (int k = 0; k < 4; ++k) g.bones[k] = key[v][k] < 0 ? 0 : key[v][k];
+      model.groups.push_back(g);
+    }
+    model.groups.back().end = i + 1;
+    for (int d = 0; d < 3; ++d) model.bind_xyz[d][i] = mesh.positions(d, v);
+    for (int k = 0; k < 4; ++k) model.group_weight[k][i] = w[v][k];
+  }
+  return order;
+}
+
+namespace {
+
+// One group: N influences with the same bones for every vertex, so the 12 numbers of each bone are loop
+// invariants and the loop body is plain multiply-adds over contiguous arrays (vectorizes).
+template <int N>
+void skin_group(const SkinGroup& g, const HandModel& m, const std::array<BoneTransform, kHandJointCount>& bones,
+                double* out) {
+  double b[N][12];
+  for (int k = 0; k < N; ++k)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) b[k][4 * r + c] = bones[g.bones[k]](r, c);
+  const double* __restrict x = m.bind_xyz[0].data();
+  const double* __restrict y = m.bind_xyz[1].data();
+  const double* __restrict z = m.bind_xyz[2].data();
+  const double* __restrict w[4] = {m.group_weight[0].data(), m.group_weight[1].data(), m.group_weight[2].data(),
+                                   m.group_weight[3].data()};
+  double* __restrict o = out;
+  for (int i = g.begin; i < g.end; ++i) {
+    double ox = 0, oy = 0, oz = 0;
+    for (int k = 0; k < N; ++k) {
+      const double wk = N == 1 ? 1.0 : w[k][i];
+      ox += wk * (b[k][0] * x[i] + b[k][1] * y[i] + b[k][2] * z[i] + b[k][3]);
+      oy += wk * (b[k][4] * x[i] + b[k][5] * y[i] + b[k][6] * z[i] + b[k][7]);
+      oz += wk * (b[k][8] * x[i] + b[k][9] * y[i] + b[k][10] * z[i] + b[k][11]);
+    }
+    o[3 * i] = ox;
+    o[3 * i + 1] = oy;
+    o[3 * i + 2] = oz;
+  }
+}
+
+}  // namespace
+
+void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out) {
+  out.resize(3, model.vertex_count());
+  double* o = out.data();
+  for (const SkinGroup& g : model.groups) {
+    switch (g.count) {
+      case 1: skin_group<1>(g, model, bones, o); break;
+      case 2: skin_group<2>(g, model, bones, o); break;
+      case 3: skin_group<3>(g, model, bones, o); break;
+      default: skin_group<4>(g, model, bones, o); break;
+    }
+  }
+}
+
+}  // namespace handsim

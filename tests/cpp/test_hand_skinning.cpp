@@ -1,0 +1,240 @@
+// Procedural mesh, skin weights and linear blend skinning (eq. 1).
+#include "handsim/hand.h"
+#include "skinning.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+using namespace handsim;
+
+namespace {
+
+const HandModel& right_model() {
+  static const HandModel m = build_hand_model(HandDef{});
+  return m;
+}
+
+Pose some_pose() {
+  Pose p;
+  p.position = Vec3(0.2, 1.0, -0.3);
+  p.orientation = Quat(Eigen::AngleAxisd(1.1, Vec3(0.3, -1, 0.5).normalized()));
+  return p;
+}
+
+bool weighted_to(const SkinnedMesh& m, int v, int first_joint, int last_joint) {
+  for (int k = 0; k < 4; ++k)
+    if (m.weights(k, v) > 0 && m.bones(k, v) >= first_joint && m.bones(k, v) <= last_joint) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(HandMesh, ClosedOutwardAndNearTheRequestedSize) {
+  for (Handedness h : {Handedness::Right, Handedness::Left}) {
+    HandDef def;
+    def.handedness = h;
+    HandModel m = build_hand_model(def);
+    const SkinnedMesh& mesh = m.mesh;
+    EXPECT_NEAR(double(m.vertex_count()), 39000.0, 39000.0 * 0.05);
+    // Closed and consistently oriented: every directed edge once, and its reverse once.
+    std::map<std::pair<int, int>, int> edges;
+    for (size_t t = 0; t < mesh.triangles.size(); t += 3)
+      for (int e = 0; e < 3; ++e) edges[{mesh.triangles[t + e], mesh.triangles[t + (e + 1) % 3]}]++;
+    int bad = 0;
+    for (auto& [e, c] : edges)
+      if (c != 1 || edges.count({e.second, e.first}) == 0 || edges.at({e.second, e.first}) != 1) ++bad;
+    EXPECT_EQ(bad, 0);
+    double vol = 0;
+    for (size_t t = 0; t < mesh.triangles.size(); t += 3)
+      vol += mesh.positions.col(mesh.triangles[t])
+                 .dot(mesh.positions.col(mesh.triangles[t + 1]).cross(mesh.positions.col(mesh.triangles[t + 2])));
+    vol /= 6;
+    EXPECT_GT(vol, 150e-6);  // a hand is a few hundred cm^3 (parts overlap, so this overcounts a little)
+    EXPECT_LT(vol, 600e-6);
+    for (int v = 0; v < m.vertex_count(); ++v) {
+      EXPECT_NEAR(mesh.weights.col(v).sum(), 1.0, 1e-12);
+      EXPECT_GE(mesh.weights.col(v).minCoeff(), 0.0);
+    }
+    EXPECT_NO_THROW(validate_skinned_mesh(mesh, "mesh"));
+  }
+}
+
+TEST(HandMesh, Deterministic) {
+  HandFrame bind = bind_frame(Handedness::Right);
+  SkinnedMesh a = make_hand_mesh(bind, 5000), b = make_hand_mesh(bind, 5000);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.weights, b.weights);
+}
+
+TEST(HandSkinning, BindPoseGivesTheBindMesh) {
+  const HandModel& m = right_model();
+  HandState s;
+  pose_hand(m, m.bind, s);
+  Eigen::Matrix3Xd out;
+  skin_render(m, s, out);
+  EXPECT_LE((out - m.mesh.positions).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LE((s.tracked_positions - m.particle_bind).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_TRUE(s.tracked);
+}
+
+TEST(HandSkinning, RigidMotionOfAllJointsMovesTheMeshRigidly) {
+  const HandModel& m = right_model();
+  const Pose T = some_pose();
+  HandFrame f = m.bind;
+  for (JointPose& j : f.joints) {
+    j.position = T.transform(j.position);
+    j.orientation = (T.orientation * j.orientation).normalized();
+  }
+  HandState s;
+  pose_hand(m, f, s);
+  Eigen::Matrix3Xd out;
+  skin_render(m, s, out);
+  double worst = 0;
+  for (int v = 0; v < m.vertex_count(); ++v)
+    worst = std::max(worst, (out.col(v) - T.transform(m.mesh.positions.col(v))).norm());
+  EXPECT_LE(worst, 1e-12);
+  for (int p = 0; p < m.particle_count(); ++p)
+    EXPECT_LE((s.tracked_positions.col(p) - T.transform(m.particle_bind.col(p))).norm(), 1e-12);
+  // Bounds enclose the particle spheres.
+  for (int p = 0; p < m.particle_count(); ++p) {
+    EXPECT_TRUE((s.tracked_positions.col(p).array() - m.particle_radius >= s.bounds_lo.array() - 1e-15).all());
+    EXPECT_TRUE((s.tracked_positions.col(p).array() + m.particle_radius <= s.bounds_hi.array() + 1e-15).all());
+  }
+}
+
+TEST(HandSkinning, BendingOneFingerMovesOnlyItsVertices) {
+  const HandModel& m = right_model();
+  HandPoseParams p;
+  p.curl[1] = 0.8;  // index only
+  HandFrame f = make_hand_frame(Handedness::Right, Pose{}, p);
+  HandState s;
+  pose_hand(m, f, s);
+  Eigen::Matrix3Xd out;
+  skin_render(m, s, out);
+  int moved_index = 0, index_vertices = 0;
+  for (int v = 0; v < m.vertex_count(); ++v) {
+    double d = (out.col(v) - m.mesh.positions.col(v)).norm();
+    if (weighted_to(m.mesh, v, kIndexProximal, kIndexTip)) {
+      ++index_vertices;
+      if (d > 1e-4) ++moved_index;
+    } else {
+      EXPECT_LE(d, 1e-12) << "vertex " << v;
+    }
+  }
+  EXPECT_GT(index_vertices, 3000);
+  EXPECT_GT(moved_index, index_vertices * 9 / 10);
+}
+
+TEST(HandSkinning, GroupedRenderPathEqualsPerVertexPath) {
+  const HandModel& m = right_model();
+  HandPoseParams p;
+  p.curl = {0.3, 0.5, 0.7, 0.9, 1.0};
+  p.thumb_opposition = 0.5;
+  p.spread = 0.4;
+  HandFrame f = make_hand_frame(Handedness::Right, some_pose(), p);
+  // Perturb the metacarpals so the palm blends (4 influences) are exercised.
+  f.joints[kRingMetacarpal].position += Vec3(0.004, -0.003, 0.002);
+  f.joints[kThumbMetacarpal].orientation =
+      (Quat(Eigen::AngleAxisd(0.3, Vec3::UnitX())) * f.joints[kThumbMetacarpal].orientation).normalized();
+  HandState s;
+  pose_hand(m, f, s);
+  Eigen::Matrix3Xd grouped, naive;
+  skin_render(m, s, grouped);
+  skin_points(m.mesh.positions, m.mesh.bones, m.mesh.weights, s.bones, naive);
+  EXPECT_LE((grouped - naive).cwiseAbs().maxCoeff(), 1e-13);
+  int four = 0;
+  for (const SkinGroup& g : m.groups) four += g.count == 4 ? g.end - g.begin : 0;
+  EXPECT_GT(four, 0);
+}
+
+TEST(HandSkinning, UntrackedFrameKeepsTheLastPose) {
+  const HandModel& m = right_model();
+  HandState s;
+  pose_hand(m, make_hand_frame(Handedness::Right, some_pose()), s);
+  Eigen::Matrix3Xd before = s.tracked_positions;
+  HandFrame lost = m.bind;
+  lost.joints[kWrist].valid = false;
+  lost.joints[kWrist].position.setConstant(std::nan(""));
+  pose_hand(m, lost, s);
+  EXPECT_FALSE(s.tracked);
+  EXPECT_EQ(s.tracked_positions, before);
+}
+
+TEST(HandSkinning, InvalidFingerJointFollowsItsParent) {
+  const HandModel& m = right_model();
+  HandPoseParams p;
+  p.curl[2] = 0.6;
+  HandFrame f = make_hand_frame(Handedness::Right, some_pose(), p);
+  HandFrame g = f;
+  g.joints[kMiddleDistal].valid = false;
+  g.joints[kMiddleDistal].position.setConstant(std::nan(""));
+  HandState s;
+  pose_hand(m, g, s);
+  EXPECT_TRUE(s.tracked_positions.allFinite());
+  EXPECT_TRUE(s.bones[kMiddleDistal].isApprox(s.bones[kMiddleIntermediate], 1e-15));
+}
+
+TEST(HandSkinning, SuppliedMeshIsValidatedAndUsable) {
+  HandFrame bind = bind_frame(Handedness::Right);
+  SkinnedMesh mesh = make_hand_mesh(bind, 3000);
+  HandDef def;
+  def.particle_count = 300;
+  HandModel m = build_hand_model(def, mesh, bind);
+  EXPECT_EQ(m.particle_count(), 300);
+  EXPECT_EQ(m.vertex_count(), mesh.positions.cols());
+  for (int i = 0; i < m.vertex_count(); ++i)
+    ASSERT_EQ(m.mesh.positions.col(i), mesh.positions.col(m.source_vertex[i]));
+
+  auto expect_error = [&](const SkinnedMesh& bad, const std::string& arg) {
+    try {
+      build_hand_model(def, bad, bind);
+      FAIL() << "expected an error on " << arg;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.argument(), arg) << e.what();
+    }
+  };
+  SkinnedMesh bad = mesh;
+  bad.positions(1, 17) = std::nan("");
+  expect_error(bad, "mesh.positions");
+  bad = mesh;
+  bad.bones(0, 5) = 26;
+  expect_error(bad, "mesh.bones");
+  bad = mesh;
+  bad.weights(0, 9) *= 0.5;
+  expect_error(bad, "mesh.weights");
+  bad = mesh;
+  bad.weights(1, 9) = -0.1;
+  expect_error(bad, "mesh.weights");
+  bad = mesh;
+  bad.triangles[4] = int(mesh.positions.cols());
+  expect_error(bad, "mesh.triangles");
+  bad = mesh;
+  bad.weights.conservativeResize(4, mesh.weights.cols() - 1);
+  expect_error(bad, "mesh.weights");
+  HandFrame bad_bind = bind;
+  bad_bind.joints[4].valid = false;
+  try {
+    build_hand_model(def, mesh, bad_bind);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.argument(), "bind.joints[4]");
+  }
+}
+
+TEST(HandSkinning, BadFramesAreRejected) {
+  const HandModel& m = right_model();
+  HandState s;
+  HandFrame f = m.bind;
+  f.joints[kIndexDistal].orientation.coeffs() << 0.1, 0.2, 0.3, 0.4;
+  try {
+    pose_hand(m, f, s);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.argument(), "frame.joints[9].orientation");
+  }
+  f = m.bind;
+  f.handedness = Handedness::Left;
+  EXPECT_THROW(pose_hand(m, f, s), Error);
+}
