@@ -1,0 +1,3 @@
+#include "joint_solvers.h"
+#include <gtest/gtest.h>
+TEST(JointSolvers, Builds) { SUCCEED(); }
