@@ -65,20 +65,27 @@ JointSolveResult levenberg_marquardt_1d(F eval, double start, double lower, doub
   double mu = 1e-4 * e.h;  // start close to Gauss-Newton; grow on rejected steps
   r.termination = JointTermination::MaxIterations;
   while (r.iterations < max_iterations) {
-    // Stationary (relative to |J||r|, by Cauchy-Schwarz the largest |g| can be): nothing to do. This is
-    // also where a start on the cost maximum stops.
-    if (std::abs(e.g) <= 1e-13 * std::sqrt(e.h * e.cost) || e.cost == 0) {
+    // Stationary relative to |J||r| (by Cauchy-Schwarz the largest |g| can be): the remaining step
+    // |g|/h is below 1e-10 * rms residual / rms lever. This is also where a start on the cost maximum stops.
+    if (std::abs(e.g) <= 1e-10 * std::sqrt(e.h * e.cost) || e.cost == 0) {
       r.termination = JointTermination::Converged;
       break;
     }
     ++r.iterations;
-    double xn = detail::clamp_to(x - e.g / (e.h + mu), lower, upper);
-    if (xn == x) {  // the clamp ate the whole step: the descent direction points out of the limits
-      r.termination = JointTermination::AtLimit;
+    const double trial = x - e.g / (e.h + mu);
+    const double xn = detail::clamp_to(trial, lower, upper);
+    if (xn == x) {  // the clamp ate the whole step (descent points out of the limits), or it is below 1 ulp
+      r.termination = trial != xn ? JointTermination::AtLimit : JointTermination::Converged;
       break;
     }
     Eval1 en = eval(xn);
     if (en.cost > e.cost) {
+      // A rejected step this small is the rounding floor of the cost (about sqrt(eps) * residual / lever
+      // in x): no step can be told to improve it.
+      if (std::abs(xn - x) <= 1e-12 * (1 + std::abs(x))) {
+        r.termination = JointTermination::Converged;
+        break;
+      }
       mu = std::max(mu * 10, 1e-12 * e.h);
       continue;
     }

@@ -128,7 +128,10 @@ JointSolveResult solve_hinge_exact(const HingeFrame& frame, const VertexMoments&
 // options.max_iterations iterations. Limits: every trial step is clamped into [lower, upper]; a step that
 // the clamp reduces to nothing ends the solve with AtLimit. Like any local method it converges to the
 // nearest stationary point: started exactly at the cost maximum (previous = optimum + pi) the gradient is
-// zero and it stops there ("Converged"); started near it, 10 iterations are not enough.
+// zero and it stops there ("Converged"); started near it, 10 iterations are not enough. Accuracy: with a
+// zero residual it converges quadratically to the last bit; with a residual, Gauss-Newton converges
+// linearly and the cost-based stop tests have a floor of ~sqrt(eps) * rms residual / rms lever radians
+// (measured ~1e-9 rad for 2 mm of noise on a 0.1 m body). Use Exact when digits matter.
 JointSolveResult solve_hinge_lm(const HingeFrame& frame, const JointVertices& vertices, const Pose& parent,
                                 const Pose& simulated, double previous, const JointSolveOptions& options = {});
 #if HANDSIM_WITH_CERES

@@ -109,7 +109,7 @@ JointSolveResult solve_ceres(const Model& model, const detail::VertexPairs& pair
 
   r.value = x;
   r.cost = 2 * summary.final_cost;  // Ceres reports 1/2 sum r^2
-  r.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  r.iterations = int(summary.iterations.size()) - 1;  // entry 0 is the starting point
   r.termination = termination_of(summary, x, lower, upper);
   return r;
 }
