@@ -87,7 +87,9 @@ struct JointSolveOptions {
   // the vertices: the solver keeps the previous value and reports Degenerate.
   double min_lever = 1e-5;
   // LmCeres only: one residual block holding all 3N residuals (true) or one 3-residual block per vertex.
-  // One block is faster at every N measured (problem setup dominates); see the report in the commit log.
+  // One block is faster at every N measured (median per solve, 1 block vs N blocks: N=64 68 vs 130 us,
+  // N=1182 0.95 vs 2.1 ms, N=39225 35 vs 95 ms): building and evaluating N blocks costs more than the
+  // solve itself.
   bool ceres_single_block = true;
 };
 
