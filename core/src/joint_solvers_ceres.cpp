@@ -7,7 +7,6 @@
 
 #include <ceres/ceres.h>
 
-#include <memory>
 
 namespace handsim {
 namespace {
