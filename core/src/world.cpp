@@ -1,10 +1,11 @@
 #include "handsim/world.h"
 
-#include "bullet_backend.h"
 #include "state_hash.h"
 #include "validate.h"
+#include "world_impl.h"
 
 #include <cmath>
+#include <cstdio>
 
 namespace handsim {
 namespace {
@@ -22,24 +23,6 @@ uint32_t world_salt(const void* impl) {
   return uint32_t(x % 4095) + 1;
 }
 
-uint32_t next_generation(uint32_t generation) {
-  uint32_t count = (generation & kGenerationMask) + 1;
-  if (count > kGenerationMask) count = 1;  // wrap-around; 0 would make the null id
-  return (generation & ~kGenerationMask) | count;
-}
-
-struct Body {
-  uint32_t generation = 0;
-  bool alive = false;
-  ShapeDef shape;
-  double mass = 0;
-  BodyMotion motion = BodyMotion::Static;
-  Pose pose;
-  Pose synced_pose;  // kinematic bodies: the pose Bullet last saw, for interpolating across substeps
-  Vec3 linear = Vec3::Zero();
-  Vec3 angular = Vec3::Zero();
-  int backend = -1;
-};
 
 BodyMotion motion_of(const BodyDef& def) {
   if (def.kinematic) return BodyMotion::Kinematic;
@@ -53,6 +36,9 @@ void validate_world_def(const WorldDef& def) {
     validate::fail("world.max_substeps", "must be in 1..1000, got " + std::to_string(def.max_substeps));
   validate::finite(def.ground_height, "world.ground_height");
   validate::non_negative(def.ground_friction, "world.ground_friction");
+  validate_grasp_settings(def.grasp);
+  if (int(def.particle_contacts) < 0 || int(def.particle_contacts) > 1)
+    validate::fail("world.particle_contacts", "unknown method " + std::to_string(int(def.particle_contacts)));
 }
 
 // Checks everything about a BodyDef and returns it with its quaternion normalized.
@@ -72,39 +58,61 @@ BodyDef validated(const BodyDef& in) {
 
 }  // namespace
 
-struct World::Impl {
-  WorldDef def;
-  std::unique_ptr<BulletBackend> backend;
-  std::vector<Body> bodies;
-  std::vector<uint32_t> free_slots;
-  double time = 0;
-  double accumulator = 0;
-  const uint32_t salt = world_salt(this);
+uint32_t next_generation(uint32_t generation) {
+  uint32_t count = (generation & kGenerationMask) + 1;
+  if (count > kGenerationMask) count = 1;  // wrap-around; 0 would make the null id
+  return (generation & ~kGenerationMask) | count;
+}
 
-  explicit Impl(const WorldDef& d) : def(d), backend(std::make_unique<BulletBackend>(d)) {}
+uint32_t first_generation(uint32_t salt) { return (salt << kGenerationBits) | 1; }
 
-  Body& body(BodyId id, const char* argument = "body") {
-    if (id.is_null())
-      validate::fail(argument, "is the null id", Status::StaleId);
-    if (id.index >= bodies.size() || bodies[id.index].generation != id.generation ||
-        !bodies[id.index].alive)
-      validate::fail(argument,
-                     "names no live body (removed, or from another world): index " +
-                         std::to_string(id.index) + ", generation " + std::to_string(id.generation),
-                     Status::StaleId);
-    return bodies[id.index];
+World::Impl::Impl(const WorldDef& d)
+    : def(d), backend(std::make_unique<BulletBackend>(d)), salt(world_salt(this)) {}
+
+namespace {
+std::string stale_message(uint32_t index, uint32_t generation) {
+  return "names no live object (removed, or from another world): index " + std::to_string(index) +
+         ", generation " + std::to_string(generation);
+}
+
+template <class Slot, class IdT>
+Slot& checked_slot(std::vector<Slot>& slots, IdT id, const char* argument) {
+  if (id.is_null()) validate::fail(argument, "is the null id", Status::StaleId);
+  if (id.index >= slots.size() || slots[id.index].generation != id.generation || !slots[id.index].alive)
+    validate::fail(argument, stale_message(id.index, id.generation), Status::StaleId);
+  return slots[id.index];
+}
+
+// Takes a free slot or appends one; returns its index.
+template <class Slot>
+uint32_t allocate_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t salt) {
+  if (!free_slots.empty()) {
+    uint32_t index = free_slots.back();
+    free_slots.pop_back();
+    return index;
   }
+  slots.emplace_back();
+  slots.back().generation = first_generation(salt);
+  return uint32_t(slots.size() - 1);
+}
 
-  void substep(double h) {
-    for (Body& b : bodies)
-      if (b.alive && b.motion == BodyMotion::Kinematic) backend->move_kinematic(b.backend, b.pose);
-    backend->step(h);
-    for (Body& b : bodies) {
-      if (!b.alive || b.motion != BodyMotion::Dynamic) continue;
-      backend->read(b.backend, b.pose, b.linear, b.angular);
-    }
-  }
-};
+template <class Slot>
+void release_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t index) {
+  const uint32_t generation = next_generation(slots[index].generation);
+  slots[index] = Slot();
+  slots[index].generation = generation;
+  free_slots.push_back(index);
+}
+}  // namespace
+
+Body& World::Impl::body(BodyId id, const char* argument) { return checked_slot(bodies, id, argument); }
+const Body& World::Impl::body(BodyId id, const char* argument) const {
+  return checked_slot(const_cast<std::vector<Body>&>(bodies), id, argument);
+}
+HandSlot& World::Impl::hand(HandId id, const char* argument) { return checked_slot(hands, id, argument); }
+const HandSlot& World::Impl::hand(HandId id, const char* argument) const {
+  return checked_slot(const_cast<std::vector<HandSlot>&>(hands), id, argument);
+}
 
 World::World(const WorldDef& def) {
   validate_world_def(def);
@@ -120,21 +128,15 @@ void World::reset() { impl_ = std::make_unique<Impl>(impl_->def); }
 
 BodyId World::add_body(const BodyDef& in) {
   BodyDef def = validated(in);
+  PreparedShape prepared = prepare_shape(def.shape, "body.shape");
   Impl& w = *impl_;
-  uint32_t index;
-  if (!w.free_slots.empty()) {
-    index = w.free_slots.back();
-    w.free_slots.pop_back();
-  } else {
-    index = uint32_t(w.bodies.size());
-    w.bodies.emplace_back();
-    w.bodies.back().generation = (w.salt << kGenerationBits) | 1;
-  }
+  const uint32_t index = allocate_slot(w.bodies, w.free_body_slots, w.salt);
   Body& b = w.bodies[index];
   b.alive = true;
   b.shape = def.shape;
+  b.prepared = std::move(prepared);
   b.mass = def.mass;
-  b.motion = motion_of(def);
+  b.declared = b.motion = motion_of(def);
   b.pose = b.synced_pose = def.pose;
   b.linear = b.motion == BodyMotion::Static ? Vec3::Zero() : def.linear_velocity;
   b.angular = b.motion == BodyMotion::Static ? Vec3::Zero() : def.angular_velocity;
@@ -143,17 +145,30 @@ BodyId World::add_body(const BodyDef& in) {
 }
 
 void World::remove_body(BodyId id) {
-  Body& b = impl_->body(id);
-  impl_->backend->remove(b.backend);
-  const uint32_t generation = next_generation(b.generation);
-  b = Body();
-  b.generation = generation;
-  impl_->free_slots.push_back(id.index);
+  Impl& w = *impl_;
+  Body& b = w.body(id);
+  // Let go of it first, so the hands' grasp state and the events stay consistent.
+  for (auto it = w.pairs.begin(); it != w.pairs.end();) {
+    if (it->first.second != id.index) {
+      ++it;
+      continue;
+    }
+    if (it->second.tracker.grasped())
+      w.events.push_back({EventType::GraspEnd, w.hand_id(it->first.first), id, EventReason::BodyRemoved});
+    it = w.pairs.erase(it);
+  }
+  w.backend->remove(b.backend);
+  release_slot(w.bodies, w.free_body_slots, id.index);
 }
 
 bool World::contains(BodyId id) const {
   return !id.is_null() && id.index < impl_->bodies.size() &&
          impl_->bodies[id.index].alive && impl_->bodies[id.index].generation == id.generation;
+}
+
+bool World::contains(HandId id) const {
+  return !id.is_null() && id.index < impl_->hands.size() && impl_->hands[id.index].alive &&
+         impl_->hands[id.index].generation == id.generation;
 }
 
 std::vector<BodyId> World::bodies() const {
@@ -166,6 +181,93 @@ std::vector<BodyId> World::bodies() const {
 const ShapeDef& World::body_shape(BodyId id) const { return impl_->body(id).shape; }
 double World::body_mass(BodyId id) const { return impl_->body(id).mass; }
 BodyMotion World::body_motion(BodyId id) const { return impl_->body(id).motion; }
+GraspInfo World::body_grasp(BodyId id) const { return impl_->body(id).grasp; }
+
+int World::body_contact_count(BodyId body, HandId hand) const {
+  impl_->body(body);
+  impl_->hand(hand);
+  auto it = impl_->pairs.find({hand.index, body.index});
+  return it == impl_->pairs.end() ? 0 : int(it->second.contacts.size());
+}
+
+const std::vector<Event>& World::events() const { return impl_->events; }
+const std::vector<StageReport>& World::stage_reports() const { return impl_->reports; }
+
+std::string World::stage_summary() const {
+  std::string out;
+  for (const StageReport& r : impl_->reports) {
+    char line[96];
+    std::snprintf(line, sizeof line, "%-12s %s %9.1f us  ", r.name, r.ran ? "ran " : "skip",
+                  r.seconds * 1e6);
+    out += line + r.why + "\n";
+  }
+  return out;
+}
+
+// --- hands ---
+
+HandId World::add_hand(const HandDef& def) {
+  auto model = std::make_shared<const HandModel>(build_hand_model(def));
+  return impl_->add_hand(def, std::move(model));
+}
+
+HandId World::add_hand(const HandDef& def, const SkinnedMesh& mesh, const HandFrame& bind) {
+  auto model = std::make_shared<const HandModel>(build_hand_model(def, mesh, bind));
+  return impl_->add_hand(def, std::move(model));
+}
+
+HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel> model) {
+  const uint32_t index = allocate_slot(hands, free_hand_slots, salt);
+  HandSlot& h = hands[index];
+  h.alive = true;
+  h.def = def;
+  h.model = std::move(model);
+  h.history = HandMotionHistory(this->def.grasp.velocity_window);
+  h.state.tracked = false;
+  h.state.tracked_positions = h.model->particle_bind;
+  h.state.deformed_positions = h.model->particle_bind;
+  return {index, h.generation};
+}
+
+void World::remove_hand(HandId id) {
+  Impl& w = *impl_;
+  w.hand(id);
+  for (auto it = w.pairs.begin(); it != w.pairs.end();) {
+    if (it->first.first != id.index) {
+      ++it;
+      continue;
+    }
+    if (it->second.tracker.grasped())
+      w.end_grasp(id.index, it->first.second, EventReason::TrackingLost, true);
+    it = w.pairs.erase(it);
+  }
+  release_slot(w.hands, w.free_hand_slots, id.index);
+}
+
+std::vector<HandId> World::hands() const {
+  std::vector<HandId> out;
+  for (uint32_t i = 0; i < impl_->hands.size(); ++i)
+    if (impl_->hands[i].alive) out.push_back(impl_->hand_id(i));
+  return out;
+}
+
+const HandModel& World::hand_model(HandId id) const { return *impl_->hand(id).model; }
+bool World::hand_tracked(HandId id) const { return impl_->hand(id).state.tracked; }
+Pose World::hand_palm_pose(HandId id) const { return impl_->hand(id).palm; }
+
+const Eigen::Matrix3Xd& World::hand_particles(HandId id, bool deformed) const {
+  const HandSlot& h = impl_->hand(id);
+  return deformed ? h.state.deformed_positions : h.state.tracked_positions;
+}
+
+const Eigen::Matrix3Xd& World::hand_render_vertices(HandId id) {
+  HandSlot& h = impl_->hand(id);
+  if (h.render_dirty) {
+    skin_render(*h.model, h.state, h.render);
+    h.render_dirty = false;
+  }
+  return h.render;
+}
 Pose World::body_pose(BodyId id) const { return impl_->body(id).pose; }
 Vec3 World::body_linear_velocity(BodyId id) const { return impl_->body(id).linear; }
 Vec3 World::body_angular_velocity(BodyId id) const { return impl_->body(id).angular; }
@@ -188,21 +290,7 @@ void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular
   impl_->backend->write(b.backend, b.pose, linear, angular);
 }
 
-void World::step(double dt) {
-  validate::time_step(dt);
-  Impl& w = *impl_;
-  const double h = w.def.fixed_substep;
-  w.accumulator += dt;
-  // The small tolerance keeps dt = 4h from yielding 3 substeps through rounding.
-  int n = int(std::floor(w.accumulator / h + 1e-9));
-  if (n > w.def.max_substeps) {
-    n = w.def.max_substeps;
-    w.accumulator = n * h;  // drop what cannot be caught up
-  }
-  for (int i = 0; i < n; ++i) w.substep(h);
-  w.accumulator = std::max(0.0, w.accumulator - n * h);
-  w.time += dt;
-}
+void World::step(double dt) { step(dt, {}); }
 
 double World::time() const { return impl_->time; }
 
@@ -217,6 +305,8 @@ uint64_t World::state_hash() const {
     hasher.add(b.pose);
     hasher.add(b.linear);
     hasher.add(b.angular);
+    hasher.add(uint64_t(b.grasp.grasped) << 63 | uint64_t(b.grasp.primary.index) << 32 |
+               uint64_t(b.grasp.secondary.is_null() ? 0xffffffffu : b.grasp.secondary.index));
   }
   return hasher.value();
 }

@@ -2,6 +2,8 @@
 // Settings structs with defaults ("defs") describe what to create; the world returns opaque ids.
 #pragma once
 
+#include "handsim/grasp_settings.h"
+#include "handsim/hand.h"
 #include "handsim/shape.h"
 #include "handsim/types.h"
 
@@ -20,6 +22,11 @@ struct WorldDef {
   bool ground = true;  // an infinite static plane y = ground_height
   double ground_height = 0.0;
   double ground_friction = 0.5;
+  GraspSettings grasp;
+  // Hand particles against objects: the core's closed-form narrow phase (default), or one Bullet collision
+  // object per particle as in the paper (a baseline for benchmarks; same contacts, ~100x the cost).
+  enum class ParticleContacts : int { ClosedForm = 0, BulletObjects = 1 } particle_contacts =
+      ParticleContacts::ClosedForm;
 };
 
 struct BodyDef {
@@ -34,6 +41,34 @@ struct BodyDef {
 };
 
 enum class BodyMotion : int { Static = 0, Dynamic = 1, Kinematic = 2 };
+
+// Who holds a body. The primary hand moves it (pose = palm pose * relative pose); a secondary hand on the
+// same body has its relative pose re-taken every frame (eq. 5), so it slides instead of fighting.
+struct GraspInfo {
+  bool grasped = false;
+  HandId primary;
+  HandId secondary;
+  Pose primary_relative;  // body pose in the primary hand's palm frame
+};
+
+enum class EventType : int { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 };
+enum class EventReason : int { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3 };
+
+// Events of the last step, pulled after it (no callbacks).
+struct Event {
+  EventType type = EventType::ContactBegin;
+  HandId hand;
+  BodyId body;
+  EventReason reason = EventReason::None;  // GraspEnd only
+};
+
+// What one stage of the last step cost, whether it had work, and why (or why not).
+struct StageReport {
+  const char* name = "";
+  double seconds = 0;
+  bool ran = false;
+  std::string why;
+};
 
 class World {
  public:
@@ -63,9 +98,34 @@ class World {
   Vec3 body_angular_velocity(BodyId id) const;
   void set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular);
 
+  // --- hands ---
+  // A hand with the procedural mesh, or with a supplied skinned mesh bound at `bind` (e.g. from glTF).
+  HandId add_hand(const HandDef& def);
+  HandId add_hand(const HandDef& def, const SkinnedMesh& mesh, const HandFrame& bind);
+  void remove_hand(HandId id);
+  bool contains(HandId id) const;
+  std::vector<HandId> hands() const;
+  const HandModel& hand_model(HandId id) const;
+  bool hand_tracked(HandId id) const;
+  Pose hand_palm_pose(HandId id) const;  // of the last tracked frame
+  // 3 x N particle centres: where the tracked hand is, and where it is drawn after the local deformation.
+  const Eigen::Matrix3Xd& hand_particles(HandId id, bool deformed) const;
+  // All render vertices, skinned on demand (only when someone asks), with the local deformation.
+  const Eigen::Matrix3Xd& hand_render_vertices(HandId id);
+
+  // --- grasps, contacts, events ---
+  GraspInfo body_grasp(BodyId id) const;
+  int body_contact_count(BodyId body, HandId hand) const;  // touching particles in the last step
+  const std::vector<Event>& events() const;
+
   // --- stepping ---
   void step(double dt);
+  // One frame of Algorithm 1: hands[i] drives the i-th hand of hands() (fewer frames than hands: the
+  // rest are untracked this frame). Everything is validated before anything changes.
+  void step(double dt, const std::vector<HandFrame>& hands);
   double time() const;
+  const std::vector<StageReport>& stage_reports() const;
+  std::string stage_summary() const;  // readable: which stages ran, what they cost, why
 
   // A stable 64-bit FNV-1a hash of every body's state (bits of the doubles), identical across runs and
   // processes for the same inputs.

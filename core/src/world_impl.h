@@ -1,0 +1,103 @@
+// The world's state, shared by world.cpp (the public API) and world_step.cpp (Algorithm 1).
+#pragma once
+
+#include "handsim/world.h"
+
+#include "bullet_backend.h"
+#include "grasp.h"
+
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace handsim {
+
+struct Body {
+  uint32_t generation = 0;
+  bool alive = false;
+  ShapeDef shape;
+  PreparedShape prepared;  // narrow-phase data for hand particles, built once
+  double mass = 0;
+  BodyMotion declared = BodyMotion::Static;  // what the BodyDef asked for
+  BodyMotion motion = BodyMotion::Static;    // now: a grasped dynamic body is kinematic
+  Pose pose;
+  Pose synced_pose;  // kinematic bodies: the pose Bullet last saw, for interpolating across substeps
+  Vec3 linear = Vec3::Zero();
+  Vec3 angular = Vec3::Zero();
+  int backend = -1;
+  GraspInfo grasp;
+  Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
+
+  bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
+};
+
+struct HandSlot {
+  uint32_t generation = 0;
+  bool alive = false;
+  HandDef def;
+  std::shared_ptr<const HandModel> model;
+  HandState state;
+  HandMotionHistory history;
+  Pose palm;
+  bool has_pose = false;  // a tracked frame has been seen
+  Eigen::Matrix3Xd render;
+  bool render_dirty = true;
+};
+
+// The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
+struct HandBodyPair {
+  GraspTracker tracker;
+  std::vector<ParticleContact> contacts;
+  int previous_count = 0;
+};
+
+struct World::Impl {
+  WorldDef def;
+  std::unique_ptr<BulletBackend> backend;
+  std::vector<Body> bodies;
+  std::vector<uint32_t> free_body_slots;
+  std::vector<HandSlot> hands;
+  std::vector<uint32_t> free_hand_slots;
+  // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
+  std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
+  std::vector<Event> events;
+  std::vector<StageReport> reports;
+  double time = 0;
+  double accumulator = 0;
+  const uint32_t salt;
+
+  explicit Impl(const WorldDef& d);
+
+  Body& body(BodyId id, const char* argument = "body");
+  const Body& body(BodyId id, const char* argument = "body") const;
+  HandSlot& hand(HandId id, const char* argument = "hand");
+  const HandSlot& hand(HandId id, const char* argument = "hand") const;
+  BodyId body_id(uint32_t index) const { return {index, bodies[index].generation}; }
+  HandId hand_id(uint32_t index) const { return {index, hands[index].generation}; }
+
+  HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
+
+  // Grasp bookkeeping (world_step.cpp).
+  void begin_grasp(uint32_t hand, uint32_t body);
+  void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
+  void set_motion(Body& b, BodyMotion motion);
+
+  // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.
+  std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
+  std::string detect_contacts();
+  std::string deform_hands();
+  std::string decide_grasps(double dt);
+  std::string follow_primary_hands();
+  std::string fit_touched_bodies(double dt);
+  std::string simulate(double dt);
+  std::string solve_joints();
+  std::string retake_secondary_hands();
+
+  void validate_step(double dt, const std::vector<HandFrame>& frames) const;
+  void substep(double h, int i, int n);
+};
+
+uint32_t next_generation(uint32_t generation);
+uint32_t first_generation(uint32_t salt);
+
+}  // namespace handsim

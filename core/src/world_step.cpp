@@ -1,0 +1,311 @@
+// One frame: Algorithm 1 of Kim & Park, read top-down in World::step. The math of each stage lives in the
+// file named after it (skinning, contacts, deformation, grasp, pose_fit, joint_solvers); this file is the
+// glue that runs the stages over the world's hands and bodies.
+#include "pose_fit.h"
+#include "validate.h"
+#include "world_impl.h"
+
+#include <chrono>
+
+namespace handsim {
+
+void World::step(double dt, const std::vector<HandFrame>& frames) {
+  Impl& w = *impl_;
+  w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
+  w.events.clear();
+  w.reports.clear();
+  auto stage = [&w](const char* name, auto&& run) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string why = run();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const bool ran = why.rfind("skip: ", 0) != 0;
+    w.reports.push_back({name, seconds, ran, std::move(why)});
+  };
+  stage("skinning", [&] { return w.pose_hands(frames, dt); });       // lines 1-2: eq. 1, particle positions
+  stage("contacts", [&] { return w.detect_contacts(); });        // line 3
+  stage("deformation", [&] { return w.deform_hands(); });        // particles pushed back to the surface
+  stage("grasp", [&] { return w.decide_grasps(dt); });           // lines 4-9, 11-13, 16: eq. 3
+  stage("attach", [&] { return w.follow_primary_hands(); });     // lines 10, 14
+  stage("pose_fit", [&] { return w.fit_touched_bodies(dt); });   // line 17: eq. 2
+  stage("dynamics", [&] { return w.simulate(dt); });             // line 18
+  stage("joints", [&] { return w.solve_joints(); });             // line 19: eq. 4
+  stage("slip", [&] { return w.retake_secondary_hands(); });     // line 20: eq. 5
+  w.time += dt;
+}
+
+void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames) const {
+  validate::time_step(dt);
+  size_t live = 0;
+  for (const HandSlot& h : hands) live += h.alive;
+  if (frames.size() > live)
+    validate::fail("hands", "got " + std::to_string(frames.size()) + " frames but the world has " +
+                                std::to_string(live) + " hands");
+  size_t k = 0;
+  for (const HandSlot& h : hands) {
+    if (!h.alive || k >= frames.size()) continue;
+    const std::string argument = "hands[" + std::to_string(k) + "]";
+    validate_frame(frames[k], argument);
+    if (frames[k].handedness != h.def.handedness)
+      validate::fail(argument + ".handedness", "does not match the hand it drives");
+    ++k;
+  }
+}
+
+// --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
+std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
+  int tracked = 0;
+  size_t k = 0;
+  for (HandSlot& h : hands) {
+    if (!h.alive) continue;
+    const HandFrame* frame = k < frames.size() ? &frames[k] : nullptr;
+    ++k;
+    if (!frame || !frame->tracked()) {
+      h.state.tracked = false;
+      h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
+      continue;
+    }
+    pose_hand(*h.model, *frame, h.state);
+    h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
+    h.has_pose = true;
+    h.history.push(h.palm, time + dt);  // the frame's end time
+    h.render_dirty = true;
+    ++tracked;
+  }
+  if (tracked == 0) return "skip: no tracked hand";
+  return std::to_string(tracked) + " tracked hand(s)";
+}
+
+// --- line 3: detect hand collision and contact particles ---
+std::string World::Impl::detect_contacts() {
+  for (auto& entry : pairs) entry.second.contacts.clear();
+  std::vector<ParticleContact> found;
+  int tested = 0, touching = 0;
+  for (uint32_t hi = 0; hi < hands.size(); ++hi) {
+    HandSlot& h = hands[hi];
+    if (!h.alive || !h.state.tracked) continue;
+    const double radius = h.model->particle_radius;
+    for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
+      Body& b = bodies[bi];
+      if (!b.alive) continue;
+      // A held object is no longer penetrated; count particles within release_distance as holding it.
+      const bool held = b.grasp.grasped && (b.grasp.primary.index == hi || b.grasp.secondary.index == hi);
+      const double margin = held ? def.grasp.release_distance : 0.0;
+      Vec3 lo, hi_b;
+      shape_world_bounds(b.shape, b.pose, lo, hi_b);
+      if (!bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
+                          lo, hi_b))
+        continue;
+      ++tested;
+      found.clear();
+      collide_particles(h.state.tracked_positions, radius + margin, b.prepared, b.pose, found);
+      for (ParticleContact& c : found) c.depth -= margin;  // true depth; held contacts may be slightly < 0
+      auto key = std::make_pair(hi, bi);
+      auto it = pairs.find(key);
+      if (found.empty() && it == pairs.end()) continue;
+      if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0}).first;
+      it->second.contacts.swap(found);
+      touching += !it->second.contacts.empty();
+    }
+  }
+  if (tested == 0) return "skip: no hand near a body";
+  return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching";
+}
+
+// --- local deformation: penetrating particles move back to the surface (what the user sees) ---
+std::string World::Impl::deform_hands() {
+  std::vector<ParticleContact> all;
+  int deformed = 0;
+  for (uint32_t hi = 0; hi < hands.size(); ++hi) {
+    HandSlot& h = hands[hi];
+    if (!h.alive || !h.state.tracked) continue;
+    all.clear();
+    for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it)
+      for (const ParticleContact& c : it->second.contacts)
+        if (c.depth > 0) all.push_back(c);
+    deform_particles(*h.model, h.state, all);
+    deformed += int(h.state.displaced.size());
+  }
+  if (deformed == 0) return "skip: no particle inside a body";
+  return std::to_string(deformed) + " particle(s) pushed back to a surface";
+}
+
+// --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
+std::string World::Impl::decide_grasps(double dt) {
+  std::vector<Vec3> directions;
+  int decided = 0;
+  for (auto it = pairs.begin(); it != pairs.end();) {
+    const uint32_t hi = it->first.first, bi = it->first.second;
+    HandBodyPair& pair = it->second;
+    Body& b = bodies[bi];
+    const HandId hand = hand_id(hi);
+    const int count = int(pair.contacts.size());
+    if (count > 0 && pair.previous_count == 0) events.push_back({EventType::ContactBegin, hand, body_id(bi)});
+    if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, body_id(bi)});
+    pair.previous_count = count;
+    if (b.manipulable()) {
+      directions.clear();
+      for (const ParticleContact& c : pair.contacts) directions.push_back(c.normal);
+      const bool opposing = count >= 2 && opposing_contacts(directions, def.grasp.cos_threshold);
+      const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
+      if (e.type == GraspEventType::GraspBegin) begin_grasp(hi, bi);
+      if (e.type == GraspEventType::GraspEnd)
+        end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
+                  e.zero_velocity);
+      ++decided;
+    }
+    // Forget pairs with nothing going on, so the map holds only what touches or holds.
+    if (count == 0 && !pair.tracker.grasped()) it = pairs.erase(it);
+    else ++it;
+  }
+  if (decided == 0) return "skip: no hand touches a movable body";
+  return std::to_string(decided) + " hand-body pair(s) decided";
+}
+
+void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
+  Body& b = bodies[bi];
+  const HandSlot& h = hands[hi];
+  if (!b.grasp.grasped) {
+    b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
+    set_motion(b, BodyMotion::Kinematic);
+  } else if (b.grasp.primary.index != hi && b.grasp.secondary.is_null()) {
+    b.grasp.secondary = hand_id(hi);
+    b.secondary_relative = h.palm.inverse() * b.pose;
+  } else {
+    return;  // a third hand on the same body: the two holding it keep it
+  }
+  events.push_back({EventType::GraspBegin, hand_id(hi), body_id(bi)});
+}
+
+void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
+  Body& b = bodies[bi];
+  const HandSlot& h = hands[hi];
+  const bool primary = b.grasp.grasped && b.grasp.primary.index == hi;
+  const bool secondary = !b.grasp.secondary.is_null() && b.grasp.secondary.index == hi;
+  if (!primary && !secondary) return;
+  if (secondary) {
+    b.grasp.secondary = HandId{};
+  } else if (!b.grasp.secondary.is_null()) {
+    // The other hand takes over from where the body is now: no jump.
+    const HandSlot& other = hands[b.grasp.secondary.index];
+    b.grasp.primary = b.grasp.secondary;
+    b.grasp.primary_relative = other.palm.inverse() * b.pose;
+    b.grasp.secondary = HandId{};
+  } else {
+    b.grasp = GraspInfo();
+    set_motion(b, BodyMotion::Dynamic);
+    const BodyVelocity v = zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position);
+    b.linear = v.linear;
+    b.angular = v.angular;
+    backend->write(b.backend, b.pose, b.linear, b.angular);
+  }
+  events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
+}
+
+void World::Impl::set_motion(Body& b, BodyMotion motion) {
+  if (b.motion == motion) return;
+  backend->set_motion(b.backend, motion, b.mass);
+  b.motion = motion;
+  b.synced_pose = b.pose;
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
+// --- lines 10, 14: a grasped object keeps its pose relative to its primary hand ---
+std::string World::Impl::follow_primary_hands() {
+  int held = 0;
+  for (Body& b : bodies) {
+    if (!b.alive || !b.grasp.grasped) continue;
+    const HandSlot& h = hands[b.grasp.primary.index];
+    b.pose = h.palm * b.grasp.primary_relative;
+    const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
+    b.linear = v.linear;
+    b.angular = v.angular;
+    ++held;
+  }
+  if (held == 0) return "skip: nothing grasped";
+  return std::to_string(held) + " grasped body(ies) follow their hand";
+}
+
+// --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
+// The fitted motion is applied as the body's velocity over this frame rather than as a teleport: in free
+// space both give the same pose, but with a velocity Bullet still resolves the table and other bodies, so
+// a hand pressing a box down cannot push it through the table.
+std::string World::Impl::fit_touched_bodies(double dt) {
+  std::vector<Vec3> from, to;
+  int fitted = 0;
+  for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
+    Body& b = bodies[bi];
+    if (!b.manipulable() || b.grasp.grasped) continue;
+    from.clear();
+    to.clear();
+    for (auto& entry : pairs) {
+      if (entry.first.second != bi) continue;
+      for (const ParticleContact& c : entry.second.contacts) {
+        if (c.depth <= 0) continue;
+        from.push_back(c.point);
+        to.push_back(c.point - c.normal * c.depth);  // where the surface must go to stop the penetration
+      }
+    }
+    if (from.empty()) continue;
+    const RigidMotion motion = fit_rigid_motion(from, to);
+    const BodyVelocity v = velocity_from_motion(motion, b.pose.position, dt);
+    b.linear = v.linear;
+    b.angular = v.angular;
+    backend->write(b.backend, b.pose, b.linear, b.angular);
+    ++fitted;
+  }
+  if (fitted == 0) return "skip: no free body touched";
+  return std::to_string(fitted) + " touched body(ies) fitted";
+}
+
+// --- line 18: physics for everything else, in fixed substeps ---
+std::string World::Impl::simulate(double dt) {
+  const double h = def.fixed_substep;
+  accumulator += dt;
+  // The small tolerance keeps dt = 4h from yielding 3 substeps through rounding.
+  int n = int(std::floor(accumulator / h + 1e-9));
+  if (n > def.max_substeps) {
+    n = def.max_substeps;
+    accumulator = n * h;  // drop what cannot be caught up
+  }
+  for (int i = 0; i < n; ++i) substep(h, i, n);
+  accumulator = std::max(0.0, accumulator - n * h);
+  if (n > 0)
+    for (Body& b : bodies)
+      if (b.alive && b.motion == BodyMotion::Kinematic) b.synced_pose = b.pose;
+  if (n == 0) return "skip: dt shorter than one substep (accumulated)";
+  return std::to_string(n) + " substep(s)";
+}
+
+void World::Impl::substep(double h, int i, int n) {
+  // Kinematic bodies glide from the pose Bullet last saw to their target over the frame's substeps, so
+  // Bullet derives the right velocity for pushing free bodies.
+  const double s = double(i + 1) / n;
+  for (Body& b : bodies) {
+    if (!b.alive || b.motion != BodyMotion::Kinematic) continue;
+    Pose p{b.synced_pose.position + s * (b.pose.position - b.synced_pose.position),
+           b.synced_pose.orientation.slerp(s, b.pose.orientation)};
+    backend->move_kinematic(b.backend, i + 1 == n ? b.pose : p);
+  }
+  backend->step(h);
+  for (Body& b : bodies) {
+    if (!b.alive || b.motion != BodyMotion::Dynamic) continue;
+    backend->read(b.backend, b.pose, b.linear, b.angular);
+  }
+}
+
+// --- line 19: joint micro-simulator (eq. 4) ---
+std::string World::Impl::solve_joints() { return "skip: no joints"; }
+
+// --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
+std::string World::Impl::retake_secondary_hands() {
+  int slipping = 0;
+  for (Body& b : bodies) {
+    if (!b.alive || b.grasp.secondary.is_null()) continue;
+    b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
+    ++slipping;
+  }
+  if (slipping == 0) return "skip: no second hand holds anything";
+  return std::to_string(slipping) + " second-hand grasp(s) re-taken";
+}
+
+}  // namespace handsim
