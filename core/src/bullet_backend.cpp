@@ -5,6 +5,7 @@
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 
+#include <cmath>
 #include <vector>
 
 namespace handsim {
@@ -88,10 +89,12 @@ struct BulletBackend::Impl {
   btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &config};
   std::vector<Entry> entries;
   std::vector<int> free_handles;
+  std::vector<std::unique_ptr<btTypedConstraint>> constraints;  // null: a free constraint slot
   Entry ground;
 
   explicit Impl(const WorldDef& def) {
     world.setGravity(bt(def.gravity));
+    world.getSolverInfo().m_numIterations = def.solver_iterations;
     if (def.ground) {
       // A large box rather than btStaticPlaneShape: box-box contact gives a full four-point manifold at
       // once, where the plane starts from one point and makes flat landings tumble.
@@ -107,6 +110,8 @@ struct BulletBackend::Impl {
   }
 
   ~Impl() {
+    for (auto& c : constraints)
+      if (c) world.removeConstraint(c.get());
     for (Entry& e : entries)
       if (e.body) world.removeRigidBody(e.body.get());
     if (ground.body) world.removeRigidBody(ground.body.get());
@@ -126,7 +131,104 @@ struct BulletBackend::Impl {
     body.forceActivationState(motion == BodyMotion::Kinematic ? DISABLE_DEACTIVATION : ACTIVE_TAG);
     body.updateInertiaTensor();
   }
+
+  btRigidBody& rigid(int handle) {
+    return handle < 0 ? btTypedConstraint::getFixedBody() : *entries[handle].body;
+  }
+
+  int add_constraint(std::unique_ptr<btTypedConstraint> c) {
+    // Linked bodies do not collide with each other: the joint is what keeps them apart.
+    world.addConstraint(c.get(), true);
+    for (size_t i = 0; i < constraints.size(); ++i)
+      if (!constraints[i]) {
+        constraints[i] = std::move(c);
+        return int(i);
+      }
+    constraints.push_back(std::move(c));
+    return int(constraints.size() - 1);
+  }
 };
+
+namespace {
+// A frame whose Z axis is `axis` (Bullet's hinge turns about Z of its frames; the slider and the cone
+// twist use X, see x_frame).
+btTransform z_frame(const Vec3& origin, const Vec3& axis) {
+  Quat q = Quat::FromTwoVectors(Vec3::UnitZ(), axis);
+  return bt(Pose{origin, q});
+}
+btTransform x_frame(const Vec3& origin, const Vec3& axis) {
+  Quat q = Quat::FromTwoVectors(Vec3::UnitX(), axis);
+  return bt(Pose{origin, q});
+}
+// The child's frame that coincides with the parent's frame `in_parent` when the child sits at rest
+// (relative orientation R0): child = parent * R0 at rest, so frame_child = R0^-1 * frame_parent's rotation.
+btTransform child_frame(const btTransform& in_parent, const Quat& rest, const Vec3& child_point) {
+  btTransform f = in_parent;
+  Pose p = from_bt(in_parent);
+  f.setRotation(bt(Pose{Vec3::Zero(), rest.conjugate() * p.orientation}).getRotation());
+  f.setOrigin(bt(child_point));
+  return f;
+}
+}  // namespace
+
+int BulletBackend::add_hinge(int parent, int child, const HingeFrame& f) {
+  btTransform a = z_frame(f.pivot_parent, f.axis_parent);
+  btTransform b = child_frame(a, f.rest, f.pivot_child);
+  auto c = std::make_unique<btHingeConstraint>(impl_->rigid(parent), impl_->rigid(child), a, b);
+  if (std::isfinite(f.lower) || std::isfinite(f.upper)) {
+    // Bullet measures the angle in (-pi, pi] and with the opposite sign (frame A relative to frame B); a
+    // limit beyond that range cannot be expressed.
+    c->setLimit(std::max(-f.upper, -M_PI), std::min(-f.lower, M_PI));
+  }
+  return impl_->add_constraint(std::move(c));
+}
+
+int BulletBackend::add_slider(int parent, int child, const SliderFrame& f) {
+  btTransform a = x_frame(f.anchor_parent, f.axis);
+  btTransform b = child_frame(a, f.rest, f.anchor_child);
+  auto c = std::make_unique<btSliderConstraint>(impl_->rigid(parent), impl_->rigid(child), a, b, true);
+  // Bullet reads lower > upper as "free"; keep infinite limits free that way.
+  c->setLowerLinLimit(std::isfinite(f.lower) ? f.lower : 1.0);
+  c->setUpperLinLimit(std::isfinite(f.upper) ? f.upper : -1.0);
+  if (std::isfinite(f.lower) != std::isfinite(f.upper)) {
+    c->setLowerLinLimit(std::isfinite(f.lower) ? f.lower : -1e6);
+    c->setUpperLinLimit(std::isfinite(f.upper) ? f.upper : 1e6);
+  }
+  c->setLowerAngLimit(0);
+  c->setUpperAngLimit(0);
+  return impl_->add_constraint(std::move(c));
+}
+
+int BulletBackend::add_ball(int parent, int child, const BallFrame& f) {
+  if (!(f.cone_half_angle < M_PI))
+    return impl_->add_constraint(std::make_unique<btPoint2PointConstraint>(
+        impl_->rigid(parent), impl_->rigid(child), bt(f.pivot_parent), bt(f.pivot_child)));
+  btTransform a = x_frame(f.pivot_parent, f.cone_axis);
+  btTransform b = child_frame(a, f.rest, f.pivot_child);
+  auto c = std::make_unique<btConeTwistConstraint>(impl_->rigid(parent), impl_->rigid(child), a, b);
+  c->setLimit(f.cone_half_angle, f.cone_half_angle, M_PI);  // twist about the cone axis stays free
+  return impl_->add_constraint(std::move(c));
+}
+
+int BulletBackend::add_fixed(int parent, int child, const FixedFrame& f) {
+  btTransform a = bt(f.relative);
+  btTransform b;
+  b.setIdentity();
+  return impl_->add_constraint(
+      std::make_unique<btFixedConstraint>(impl_->rigid(parent), impl_->rigid(child), a, b));
+}
+
+void BulletBackend::remove_constraint(int handle) {
+  impl_->world.removeConstraint(impl_->constraints[handle].get());
+  impl_->constraints[handle].reset();
+}
+
+void BulletBackend::set_collision(int a, int b, bool enabled) {
+  btRigidBody& ra = impl_->rigid(a);
+  btRigidBody& rb = impl_->rigid(b);
+  ra.setIgnoreCollisionCheck(&rb, !enabled);
+  rb.setIgnoreCollisionCheck(&ra, !enabled);
+}
 
 BulletBackend::BulletBackend(const WorldDef& def) : impl_(std::make_unique<Impl>(def)) {}
 BulletBackend::~BulletBackend() = default;
@@ -191,6 +293,10 @@ void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) co
   pose = from_bt(body.getWorldTransform());
   linear = from_bt(body.getLinearVelocity());
   angular = from_bt(body.getAngularVelocity());
+}
+
+void BulletBackend::set_gravity(int handle, const Vec3& gravity) {
+  impl_->entries[handle].body->setGravity(bt(gravity));
 }
 
 void BulletBackend::step(double h) {

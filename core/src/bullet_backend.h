@@ -5,6 +5,8 @@
 
 #include "handsim/world.h"
 
+#include "joint_solvers.h"
+
 #include <memory>
 
 namespace handsim {
@@ -26,6 +28,17 @@ class BulletBackend {
   void move_kinematic(int handle, const Pose& pose);
   void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
   void step(double h);
+  void set_gravity(int handle, const Vec3& gravity);
+
+  // Soft joints (the JointModel::Soft baseline): Bullet constraints between two body handles, -1 for the
+  // world. Each returns a constraint handle.
+  int add_hinge(int parent, int child, const HingeFrame& f);
+  int add_slider(int parent, int child, const SliderFrame& f);
+  int add_ball(int parent, int child, const BallFrame& f);
+  int add_fixed(int parent, int child, const FixedFrame& f);
+  void remove_constraint(int handle);
+  // Whether two bodies may collide. A hard joint's child overlaps its parent at the joint by design.
+  void set_collision(int a, int b, bool enabled);
 
  private:
   struct Impl;

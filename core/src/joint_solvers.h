@@ -93,13 +93,6 @@ struct JointSolveOptions {
   bool ceres_single_block = true;
 };
 
-enum class JointTermination : int {
-  Converged = 0,      // exact: the unconstrained optimum was inside the limits; LM: step/gradient tolerance
-  MaxIterations = 1,  // LM ran out of iterations; value is the last accepted iterate
-  Degenerate = 2,     // the cost does not depend on the coordinate (enough): value is the previous one
-  AtLimit = 3,        // the result sits on a limit because the optimum lies beyond it
-};
-
 struct JointSolveResult {
   double value = 0.0;  // theta (rad) or s (m)
   double cost = 0.0;   // E(value), m^2 (times the weight unit)

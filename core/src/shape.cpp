@@ -56,4 +56,25 @@ void shape_local_bounds(const ShapeDef& s, Vec3& lo, Vec3& hi) {
   lo = -hi;
 }
 
+// Principal moments of inertia per kg in the body frame. Hulls and meshes use their bounding box: the
+// joint dynamics only needs the inertia to within a few percent for a plausible swing.
+Vec3 shape_unit_inertia(const ShapeDef& s) {
+  switch (s.type) {
+    case ShapeType::Sphere:
+      return Vec3::Constant(0.4 * s.radius * s.radius);
+    case ShapeType::Capsule: {
+      // A cylinder of the capsule's full length: within ~10% of the exact capsule.
+      const double r2 = s.radius * s.radius, length = 2 * (s.half_height + s.radius);
+      const double across = (3 * r2 + length * length) / 12.0;
+      return Vec3(across, 0.5 * r2, across);
+    }
+    default: {
+      Vec3 lo, hi;
+      shape_local_bounds(s, lo, hi);
+      const Vec3 e2 = (0.5 * (hi - lo)).array().square();
+      return Vec3(e2.y() + e2.z(), e2.x() + e2.z(), e2.x() + e2.y()) / 3.0;
+    }
+  }
+}
+
 }  // namespace handsim

@@ -36,6 +36,11 @@ void validate_world_def(const WorldDef& def) {
     validate::fail("world.max_substeps", "must be in 1..1000, got " + std::to_string(def.max_substeps));
   validate::finite(def.ground_height, "world.ground_height");
   validate::non_negative(def.ground_friction, "world.ground_friction");
+  if (def.solver_iterations < 1 || def.solver_iterations > 10000)
+    validate::fail("world.solver_iterations", "must be in 1..10000, got " + std::to_string(def.solver_iterations));
+  if (def.joint_max_iterations < 1 || def.joint_max_iterations > 10000)
+    validate::fail("world.joint_max_iterations",
+                   "must be in 1..10000, got " + std::to_string(def.joint_max_iterations));
   validate_grasp_settings(def.grasp);
   if (int(def.particle_contacts) < 0 || int(def.particle_contacts) > 1)
     validate::fail("world.particle_contacts", "unknown method " + std::to_string(int(def.particle_contacts)));
@@ -140,6 +145,7 @@ BodyId World::add_body(const BodyDef& in) {
   b.pose = b.synced_pose = def.pose;
   b.linear = b.motion == BodyMotion::Static ? Vec3::Zero() : def.linear_velocity;
   b.angular = b.motion == BodyMotion::Static ? Vec3::Zero() : def.angular_velocity;
+  b.unit_inertia = shape_unit_inertia(def.shape);
   b.backend = w.backend->add(def, b.motion);
   return {index, b.generation};
 }
@@ -147,6 +153,9 @@ BodyId World::add_body(const BodyDef& in) {
 void World::remove_body(BodyId id) {
   Impl& w = *impl_;
   Body& b = w.body(id);
+  for (const Joint& j : w.joints)
+    if (j.alive && (j.child == id.index || j.parent == id.index))
+      validate::fail("body", "a joint still uses it; remove the joint first", Status::InvalidState);
   // Let go of it first, so the hands' grasp state and the events stay consistent.
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
     if (it->first.second != id.index) {
@@ -275,8 +284,14 @@ Vec3 World::body_angular_velocity(BodyId id) const { return impl_->body(id).angu
 void World::set_body_pose(BodyId id, const Pose& pose) {
   Body& b = impl_->body(id);
   Pose p = validate::pose(pose, "pose");
+  if (b.jointed())
+    validate::fail("body", "is the child of a hard joint; move its parent or set the joint value",
+                   Status::InvalidState);
   b.pose = b.synced_pose = p;
+  // A held body stays held where it was put: its pose relative to the hand is re-taken.
+  if (b.grasp.grasped) b.grasp.primary_relative = impl_->hands[b.grasp.primary.index].palm.inverse() * p;
   impl_->backend->write(b.backend, p, b.linear, b.angular);
+  if (!impl_->joint_order.empty()) impl_->place_children();
 }
 
 void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular) {
@@ -285,6 +300,8 @@ void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular
   validate::finite(angular, "angular");
   if (b.motion == BodyMotion::Static)
     validate::fail("body", "a static body cannot have a velocity", Status::InvalidState);
+  if (b.jointed())
+    validate::fail("body", "is the child of a hard joint; its velocity comes from the joint", Status::InvalidState);
   b.linear = linear;
   b.angular = angular;
   impl_->backend->write(b.backend, b.pose, linear, angular);
@@ -307,6 +324,13 @@ uint64_t World::state_hash() const {
     hasher.add(b.angular);
     hasher.add(uint64_t(b.grasp.grasped) << 63 | uint64_t(b.grasp.primary.index) << 32 |
                uint64_t(b.grasp.secondary.is_null() ? 0xffffffffu : b.grasp.secondary.index));
+  }
+  for (const Joint& j : impl_->joints) {
+    hasher.add(uint64_t(j.alive));
+    if (!j.alive) continue;
+    hasher.add(j.value);
+    hasher.add(j.rate);
+    hasher.add(Pose{j.spin, j.rotation});
   }
   return hasher.value();
 }

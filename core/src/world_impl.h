@@ -5,6 +5,7 @@
 
 #include "bullet_backend.h"
 #include "grasp.h"
+#include "joint_solvers.h"
 
 #include <map>
 #include <memory>
@@ -27,8 +28,43 @@ struct Body {
   int backend = -1;
   GraspInfo grasp;
   Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
+  Vec3 unit_inertia = Vec3::Ones();  // principal moments per kg, body frame (for hard joints' dynamics)
+  int hard_joint = -1;  // index of the hard joint whose child this is, or -1
+  int soft_joint = -1;
+  // Pushed by a hand against gravity this frame (eq. 2): the hand carries the body's weight, so gravity is
+  // off for the frame; otherwise a slow push from below could never lift anything.
+  bool supported = false;  // index of a soft joint whose child this is (driven by the hand, not attached)
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
+  bool jointed() const { return hard_joint >= 0; }
+};
+
+constexpr uint32_t kWorldParent = UINT32_MAX;
+
+// A joint and its state. Hard joints keep their coordinate here and place the child from it; soft joints
+// live in Bullet and only read back.
+struct Joint {
+  uint32_t generation = 0;
+  bool alive = false;
+  JointType type = JointType::Hinge;
+  JointModel model = JointModel::Hard;
+  JointSolver solver = JointSolver::Exact;
+  uint32_t parent = kWorldParent;
+  uint32_t child = 0;
+  HingeFrame hinge;
+  SliderFrame slider;
+  BallFrame ball;
+  FixedFrame fixed;
+  double damping = 0;
+  JointVertices vertices;  // the child's model vertices and their moments about the joint point (eq. 4)
+  double length = 0;       // child size (m) that turns an axis error into a displacement
+  double value = 0, rate = 0;          // hinge / slider coordinate and its rate
+  Quat rotation = Quat::Identity();    // ball
+  Vec3 spin = Vec3::Zero();            // ball: angular velocity relative to the parent, world frame
+  int constraint = -1;                 // soft: Bullet constraint handle
+  int depth = 0;                       // hard: joints between the child and the root of its group
+  JointSolveResult last;
+  bool solved = false;
 };
 
 struct HandSlot {
@@ -56,6 +92,9 @@ struct World::Impl {
   std::unique_ptr<BulletBackend> backend;
   std::vector<Body> bodies;
   std::vector<uint32_t> free_body_slots;
+  std::vector<Joint> joints;
+  std::vector<uint32_t> free_joint_slots;
+  std::vector<uint32_t> joint_order;  // live hard joints, parents before children
   std::vector<HandSlot> hands;
   std::vector<uint32_t> free_hand_slots;
   // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
@@ -74,6 +113,22 @@ struct World::Impl {
   const HandSlot& hand(HandId id, const char* argument = "hand") const;
   BodyId body_id(uint32_t index) const { return {index, bodies[index].generation}; }
   HandId hand_id(uint32_t index) const { return {index, hands[index].generation}; }
+  JointId joint_id(uint32_t index) const { return {index, joints[index].generation}; }
+  Joint& joint(JointId id, const char* argument = "joint");
+  const Joint& joint(JointId id, const char* argument = "joint") const;
+
+  // Joints (world_joints.cpp).
+  JointId add_joint(Joint j, BodyId parent, BodyId child, const std::string& argument);
+  void rebuild_joint_order();
+  Pose parent_pose(const Joint& j) const;
+  Pose joint_child_pose(const Joint& j) const;  // where the coordinate puts the child now
+  void place_children();                        // every hard child from its parent and coordinate
+  void integrate_joints(double h);              // free hard joints: gravity, damping, limits
+  void drive_soft_children(double h);           // grasped soft-joint children chase their hand
+  void project_push(Joint& j, const Pose& simulated, double dt);  // eq. 2 motion onto the joint
+  void solve_grasped(Joint& j, const Pose& simulated, double dt); // eq. 4 for a grasped child
+  void read_soft_joint(Joint& j);
+  JointSolveOptions joint_options() const;
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
 
@@ -90,7 +145,7 @@ struct World::Impl {
   std::string follow_primary_hands();
   std::string fit_touched_bodies(double dt);
   std::string simulate(double dt);
-  std::string solve_joints();
+  std::string solve_joints(double dt);
   std::string retake_secondary_hands();
 
   void validate_step(double dt, const std::vector<HandFrame>& frames) const;

@@ -28,7 +28,7 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
   stage("attach", [&] { return w.follow_primary_hands(); });     // lines 10, 14
   stage("pose_fit", [&] { return w.fit_touched_bodies(dt); });   // line 17: eq. 2
   stage("dynamics", [&] { return w.simulate(dt); });             // line 18
-  stage("joints", [&] { return w.solve_joints(); });             // line 19: eq. 4
+  stage("joints", [&] { return w.solve_joints(dt); });             // line 19: eq. 4
   stage("slip", [&] { return w.retake_secondary_hands(); });     // line 20: eq. 5
   w.time += dt;
 }
@@ -166,7 +166,9 @@ void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
   const HandSlot& h = hands[hi];
   if (!b.grasp.grasped) {
     b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
-    set_motion(b, BodyMotion::Kinematic);
+    // A free body is attached to the hand. A joint's child is not: the hand only tells the joint where it
+    // wants the child (hard: solve_joints; soft: a velocity drive against the Bullet constraint).
+    if (!b.jointed() && b.soft_joint < 0) set_motion(b, BodyMotion::Kinematic);
   } else if (b.grasp.primary.index != hi && b.grasp.secondary.is_null()) {
     b.grasp.secondary = hand_id(hi);
     b.secondary_relative = h.palm.inverse() * b.pose;
@@ -190,6 +192,8 @@ void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool z
     b.grasp.primary = b.grasp.secondary;
     b.grasp.primary_relative = other.palm.inverse() * b.pose;
     b.grasp.secondary = HandId{};
+  } else if (b.jointed() || b.soft_joint >= 0) {
+    b.grasp = GraspInfo();  // the joint keeps the velocity the hand gave it
   } else {
     b.grasp = GraspInfo();
     set_motion(b, BodyMotion::Dynamic);
@@ -213,7 +217,7 @@ void World::Impl::set_motion(Body& b, BodyMotion motion) {
 std::string World::Impl::follow_primary_hands() {
   int held = 0;
   for (Body& b : bodies) {
-    if (!b.alive || !b.grasp.grasped) continue;
+    if (!b.alive || !b.grasp.grasped || b.jointed() || b.soft_joint >= 0) continue;
     const HandSlot& h = hands[b.grasp.primary.index];
     b.pose = h.palm * b.grasp.primary_relative;
     const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
@@ -232,6 +236,7 @@ std::string World::Impl::follow_primary_hands() {
 std::string World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3> from, to;
   int fitted = 0;
+  for (Body& b : bodies) b.supported = false;
   for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
     Body& b = bodies[bi];
     if (!b.manipulable() || b.grasp.grasped) continue;
@@ -247,7 +252,16 @@ std::string World::Impl::fit_touched_bodies(double dt) {
     }
     if (from.empty()) continue;
     const RigidMotion motion = fit_rigid_motion(from, to);
+    if (b.jointed()) {
+      // The push moves the child only along its joint: eq. 2's motion projected by the micro-simulator.
+      const Pose simulated = apply_motion(motion, b.pose);
+      b.supported = (simulated.position - b.pose.position).dot(def.gravity) < 0;
+      project_push(joints[b.hard_joint], simulated, dt);
+      ++fitted;
+      continue;
+    }
     const BodyVelocity v = velocity_from_motion(motion, b.pose.position, dt);
+    b.supported = v.linear.dot(def.gravity) < 0;
     b.linear = v.linear;
     b.angular = v.angular;
     backend->write(b.backend, b.pose, b.linear, b.angular);
@@ -267,11 +281,15 @@ std::string World::Impl::simulate(double dt) {
     n = def.max_substeps;
     accumulator = n * h;  // drop what cannot be caught up
   }
+  for (Body& b : bodies)
+    if (b.alive && b.supported && !b.jointed()) backend->set_gravity(b.backend, Vec3::Zero());
   for (int i = 0; i < n; ++i) substep(h, i, n);
+  for (Body& b : bodies)
+    if (b.alive && b.supported && !b.jointed()) backend->set_gravity(b.backend, def.gravity);
   accumulator = std::max(0.0, accumulator - n * h);
   if (n > 0)
     for (Body& b : bodies)
-      if (b.alive && b.motion == BodyMotion::Kinematic) b.synced_pose = b.pose;
+      if (b.alive && b.motion == BodyMotion::Kinematic && !b.jointed()) b.synced_pose = b.pose;
   if (n == 0) return "skip: dt shorter than one substep (accumulated)";
   return std::to_string(n) + " substep(s)";
 }
@@ -281,20 +299,22 @@ void World::Impl::substep(double h, int i, int n) {
   // Bullet derives the right velocity for pushing free bodies.
   const double s = double(i + 1) / n;
   for (Body& b : bodies) {
-    if (!b.alive || b.motion != BodyMotion::Kinematic) continue;
+    if (!b.alive || b.motion != BodyMotion::Kinematic || b.jointed()) continue;
     Pose p{b.synced_pose.position + s * (b.pose.position - b.synced_pose.position),
            b.synced_pose.orientation.slerp(s, b.pose.orientation)};
     backend->move_kinematic(b.backend, i + 1 == n ? b.pose : p);
   }
+  drive_soft_children(h);
   backend->step(h);
   for (Body& b : bodies) {
     if (!b.alive || b.motion != BodyMotion::Dynamic) continue;
     backend->read(b.backend, b.pose, b.linear, b.angular);
   }
+  if (!joint_order.empty()) {
+    integrate_joints(h);
+    place_children();  // after the parents moved, so a child rides on a falling or carried parent
+  }
 }
-
-// --- line 19: joint micro-simulator (eq. 4) ---
-std::string World::Impl::solve_joints() { return "skip: no joints"; }
 
 // --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
 std::string World::Impl::retake_secondary_hands() {

@@ -24,6 +24,14 @@ enum class JointModel : int {
   Soft = 1,  // Bullet btHingeConstraint & co. baseline: may stretch under large hand forces
 };
 
+// How the micro-simulator's last solve ended.
+enum class JointTermination : int {
+  Converged = 0,      // exact: the unconstrained optimum was inside the limits; LM: step/gradient tolerance
+  MaxIterations = 1,  // LM ran out of iterations; value is the last accepted iterate
+  Degenerate = 2,     // the cost does not depend on the coordinate (enough): value is the previous one
+  AtLimit = 3,        // the result sits on a limit because the optimum lies beyond it
+};
+
 constexpr double kUnlimited = std::numeric_limits<double>::infinity();
 
 // Revolute joint. At angle theta the child pose is

@@ -56,5 +56,8 @@ void validate_shape(const ShapeDef& shape, const std::string& argument);
 
 // Local-frame axis-aligned bounds of the shape.
 void shape_local_bounds(const ShapeDef& shape, Vec3& lo, Vec3& hi);
+// Principal moments of inertia per kg about the body origin, body frame (boxes, spheres exact; capsules as
+// a cylinder of their full length; hulls and meshes as their bounding box).
+Vec3 shape_unit_inertia(const ShapeDef& shape);
 
 }  // namespace handsim

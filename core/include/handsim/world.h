@@ -4,6 +4,7 @@
 
 #include "handsim/grasp_settings.h"
 #include "handsim/hand.h"
+#include "handsim/joint.h"
 #include "handsim/shape.h"
 #include "handsim/types.h"
 
@@ -22,6 +23,11 @@ struct WorldDef {
   bool ground = true;  // an infinite static plane y = ground_height
   double ground_height = 0.0;
   double ground_friction = 0.5;
+  // Bullet's sequential-impulse iterations per substep. They matter only for free-body contacts and for
+  // JointModel::Soft joints; hard joints are solved in closed form by the core.
+  int solver_iterations = 10;
+  // Levenberg-Marquardt iteration cap of the micro-simulator's Lm / LmCeres modes (the paper's 10).
+  int joint_max_iterations = 10;
   GraspSettings grasp;
   // Hand particles against objects: the core's closed-form narrow phase (default), or one Bullet collision
   // object per particle as in the paper (a baseline for benchmarks; same contacts, ~100x the cost).
@@ -62,6 +68,31 @@ struct Event {
   EventReason reason = EventReason::None;  // GraspEnd only
 };
 
+enum class JointType : int { Hinge = 0, Slider = 1, Ball = 2, Fixed = 3 };
+
+// One joint after the last step.
+struct JointState {
+  JointType type = JointType::Hinge;
+  JointModel model = JointModel::Hard;
+  JointSolver solver = JointSolver::Exact;
+  BodyId parent;  // null: the world
+  BodyId child;
+  double value = 0;  // hinge: theta (rad); slider: s (m); ball, fixed: 0
+  double rate = 0;   // d value / dt
+  Quat rotation = Quat::Identity();  // ball: R (parent frame, identity at rest)
+  // Metres, measured from the two bodies' poses: how far the joint is pulled apart. Hard joints: rounding
+  // only; soft joints: the rubber band.
+  double violation = 0;
+  // Radians (hinge) or metres (slider) beyond a limit, measured from the poses; 0 inside the limits.
+  double overshoot = 0;
+  // The micro-simulator's solve of the last step (the child was grasped or pushed); solved = false otherwise.
+  bool solved = false;
+  double cost = 0;
+  int iterations = 0;
+  JointTermination termination = JointTermination::Converged;
+  double solve_seconds = 0;
+};
+
 // What one stage of the last step cost, whether it had work, and why (or why not).
 struct StageReport {
   const char* name = "";
@@ -85,7 +116,7 @@ class World {
 
   // --- bodies ---
   BodyId add_body(const BodyDef& def);
-  void remove_body(BodyId id);
+  void remove_body(BodyId id);  // Status::InvalidState while a joint uses it
   bool contains(BodyId id) const;
   std::vector<BodyId> bodies() const;
   const ShapeDef& body_shape(BodyId id) const;
@@ -97,6 +128,23 @@ class World {
   Vec3 body_linear_velocity(BodyId id) const;
   Vec3 body_angular_velocity(BodyId id) const;
   void set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular);
+
+  // --- joints ---
+  // A hard joint's child is moved by the joint only: it stays on the joint and inside its limits in every
+  // situation (grasped, pushed, falling). A body may be the child of one hard joint; the joint's parent may
+  // itself be a child (chains and trees, no loops). Status::InvalidState for a second hard joint on the same
+  // child, a loop, or a static/kinematic child.
+  JointId add_joint(const HingeDef& def);
+  JointId add_joint(const SliderDef& def);
+  JointId add_joint(const BallDef& def);
+  JointId add_joint(const FixedDef& def);
+  // The child becomes a free body again, keeping its velocity.
+  void remove_joint(JointId id);
+  bool contains(JointId id) const;
+  std::vector<JointId> joints() const;
+  JointState joint_state(JointId id) const;
+  // Hinge / slider: teleport the child to this coordinate (clamped to the limits) at rest.
+  void set_joint_value(JointId id, double value);
 
   // --- hands ---
   // A hand with the procedural mesh, or with a supplied skinned mesh bound at `bind` (e.g. from glTF).

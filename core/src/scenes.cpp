@@ -1,0 +1,106 @@
+#include "handsim/scenes.h"
+
+#include "validate.h"
+
+namespace handsim {
+namespace {
+
+void validate_def(const JewelryBoxDef& d) {
+  validate::finite(d.position, "jewelry_box.position");
+  validate::finite(d.yaw, "jewelry_box.yaw");
+  validate::positive(d.base_half_extents, "jewelry_box.base_half_extents");
+  validate::positive(d.lid_half_thickness, "jewelry_box.lid_half_thickness");
+  validate::non_negative(d.base_mass, "jewelry_box.base_mass");
+  validate::positive(d.lid_mass, "jewelry_box.lid_mass");
+  validate::non_negative(d.lid_overhang, "jewelry_box.lid_overhang");
+  validate::non_negative(d.friction, "jewelry_box.friction");
+}
+
+Quat yaw_rotation(double yaw) { return Quat(Eigen::AngleAxisd(yaw, Vec3::UnitY())); }
+
+}  // namespace
+
+JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
+  validate_def(d);
+  HingeDef hinge;  // validated before anything is added
+  hinge.lower = d.lower;
+  hinge.upper = d.upper;
+  hinge.damping = d.damping;
+  hinge.model = d.model;
+  hinge.solver = d.solver;
+  hinge.child = BodyId{0, 1};
+  hinge.parent = BodyId{1, 1};
+  validate_joint(hinge, "jewelry_box");
+
+  const Quat q = yaw_rotation(d.yaw);
+  const Vec3& e = d.base_half_extents;
+  JewelryBox box;
+  box.def = d;
+  if (d.table) {
+    BodyDef table;
+    table.shape = ShapeDef::box(Vec3(0.6, 0.5 * d.position.y(), 0.4));
+    table.mass = 0;
+    table.pose = {Vec3(d.position.x(), 0.5 * d.position.y(), d.position.z()), q};
+    table.friction = d.friction;
+    box.table = world.add_body(table);
+  }
+  BodyDef base;
+  base.shape = ShapeDef::box(e);
+  base.mass = d.base_mass;
+  base.pose = {d.position + q * Vec3(0, e.y(), 0), q};
+  base.friction = d.friction;
+  box.base = world.add_body(base);
+
+  BodyDef lid;
+  const double lid_half_depth = e.z() + 0.5 * d.lid_overhang;
+  lid.shape = ShapeDef::box(Vec3(e.x(), d.lid_half_thickness, lid_half_depth));
+  lid.mass = d.lid_mass;
+  lid.pose = {d.position + q * Vec3(0, 2 * e.y() + d.lid_half_thickness, 0.5 * d.lid_overhang), q};
+  lid.friction = d.friction;
+  box.lid = world.add_body(lid);
+
+  // The hinge runs along the back (-Z) edge where the lid's underside meets the base's top.
+  hinge.parent = box.base;
+  hinge.child = box.lid;
+  hinge.pivot_parent = Vec3(0, e.y(), -e.z());
+  hinge.axis_parent = -Vec3::UnitX();
+  hinge.pivot_child = Vec3(0, -d.lid_half_thickness, -lid_half_depth);
+  hinge.axis_child = -Vec3::UnitX();
+  box.hinge = world.add_joint(hinge);
+  return box;
+}
+
+Vec3 JewelryBox::lid_front(const World& world) const {
+  return world.body_pose(lid).transform(Vec3(0, 0, def.base_half_extents.z() + 0.5 * def.lid_overhang));
+}
+
+Vec3 JewelryBox::hinge_pivot(const World& world) const {
+  return world.body_pose(base).transform(Vec3(0, def.base_half_extents.y(), -def.base_half_extents.z()));
+}
+
+Vec3 JewelryBox::hinge_axis(const World& world) const {
+  return world.body_pose(base).orientation * -Vec3::UnitX();
+}
+
+HandPoseParams lid_pinch_shape() {
+  HandPoseParams p;
+  p.thumb_opposition = 0.5;
+  return p;
+}
+
+Pose JewelryBox::lid_pinch_palm(const World& world, Handedness handedness, double angle, double lift) const {
+  // Measured on make_hand_frame(lid_pinch_shape()): with the palm 6 mm above the lid top and 6.2 cm in front
+  // of the lip, the index tip rests 5 cm in on the lid and the thumb tip sits under the lip, 2.4 cm to the
+  // thumb side of the palm centre: the hand is shifted that way to centre the pinch on the lid.
+  const Pose b = world.body_pose(base);
+  const Vec3& e = def.base_half_extents;
+  const double side = handedness == Handedness::Right ? 1.0 : -1.0;
+  const Vec3 local(0.024 * side, e.y() + 2 * def.lid_half_thickness + 0.006 + lift,
+                   e.z() + def.lid_overhang + 0.062);
+  const Pose closed{b.transform(local), b.orientation};
+  const Vec3 pivot = hinge_pivot(world);
+  const Quat swing(Eigen::AngleAxisd(angle, hinge_axis(world)));
+  return {pivot + swing * (closed.position - pivot), (swing * closed.orientation).normalized()};
+}
+
+}  // namespace handsim

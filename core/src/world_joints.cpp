@@ -1,0 +1,538 @@
+// Joints in the world. Hard joints (the default) keep the child in reduced coordinates: the core owns the
+// joint coordinate, integrates it under gravity when nobody holds the child, projects a push (eq. 2) onto
+// it, and fits it to the hand when the child is grasped (the micro-simulator, eq. 4). The child is a
+// kinematic body in Bullet, placed from its parent and its coordinate, so it can never leave the joint or
+// pass a limit. Soft joints are Bullet constraints between two dynamic bodies: the baseline that shows the
+// rubber-band effect.
+#include "pose_fit.h"
+#include "validate.h"
+#include "world_impl.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+namespace handsim {
+namespace {
+
+// The child's model vertices for the micro-simulator (body frame): the corners of a box, the extreme
+// points of round shapes, the points of a hull or mesh.
+Eigen::Matrix3Xd model_vertices(const ShapeDef& s) {
+  std::vector<Vec3> v;
+  switch (s.type) {
+    case ShapeType::Box:
+      for (int k = 0; k < 8; ++k)
+        v.push_back(s.half_extents.cwiseProduct(Vec3(k & 1 ? 1 : -1, k & 2 ? 1 : -1, k & 4 ? 1 : -1)));
+      break;
+    case ShapeType::Sphere:
+    case ShapeType::Capsule:
+      for (double y : {-s.half_height, s.half_height})
+        for (int axis : {0, 2})
+          for (double sign : {-1.0, 1.0}) v.push_back(Vec3(0, y, 0) + sign * s.radius * Vec3::Unit(axis));
+      v.push_back(Vec3(0, s.half_height + s.radius, 0));
+      v.push_back(Vec3(0, -s.half_height - s.radius, 0));
+      break;
+    default:
+      v = s.points;
+  }
+  Eigen::Matrix3Xd m(3, v.size());
+  for (size_t i = 0; i < v.size(); ++i) m.col(i) = v[i];
+  return m;
+}
+
+Vec3 joint_point_on_child(const Joint& j) {
+  switch (j.type) {
+    case JointType::Hinge: return j.hinge.pivot_child;
+    case JointType::Slider: return j.slider.anchor_child;
+    case JointType::Ball: return j.ball.pivot_child;
+    case JointType::Fixed: return j.fixed.relative.inverse().position;
+  }
+  return Vec3::Zero();
+}
+
+Mat3 world_inertia(const Body& b) {
+  const Mat3 R = b.pose.orientation.toRotationMatrix();
+  return R * (b.mass * b.unit_inertia).asDiagonal() * R.transpose();
+}
+
+double clamp_coordinate(double& value, double& rate, double lower, double upper) {
+  // An inelastic stop: the rate into the limit is removed.
+  if (value < lower) {
+    const double over = lower - value;
+    value = lower;
+    rate = std::max(rate, 0.0);
+    return over;
+  }
+  if (value > upper) {
+    const double over = value - upper;
+    value = upper;
+    rate = std::min(rate, 0.0);
+    return over;
+  }
+  return 0;
+}
+
+}  // namespace
+
+Joint& World::Impl::joint(JointId id, const char* argument) {
+  if (id.is_null()) validate::fail(argument, "is the null id", Status::StaleId);
+  if (id.index >= joints.size() || joints[id.index].generation != id.generation || !joints[id.index].alive)
+    validate::fail(argument, "names no live joint (removed, or from another world)", Status::StaleId);
+  return joints[id.index];
+}
+const Joint& World::Impl::joint(JointId id, const char* argument) const {
+  return const_cast<Impl*>(this)->joint(id, argument);
+}
+
+JointSolveOptions World::Impl::joint_options() const {
+  JointSolveOptions o;
+  o.max_iterations = def.joint_max_iterations;
+  return o;
+}
+
+Pose World::Impl::parent_pose(const Joint& j) const {
+  return j.parent == kWorldParent ? Pose() : bodies[j.parent].pose;
+}
+
+Pose World::Impl::joint_child_pose(const Joint& j) const {
+  const Pose p = parent_pose(j);
+  switch (j.type) {
+    case JointType::Hinge: return hinge_child_pose(j.hinge, p, j.value);
+    case JointType::Slider: return slider_child_pose(j.slider, p, j.value);
+    case JointType::Ball: return ball_child_pose(j.ball, p, j.rotation);
+    case JointType::Fixed: return fixed_child_pose(j.fixed, p);
+  }
+  return p;
+}
+
+// --- adding and removing ---
+
+namespace {
+// Which joint coordinate the current poses imply, clamped into the limits.
+void read_coordinate(Joint& j, const Pose& parent, const Pose& child) {
+  switch (j.type) {
+    case JointType::Hinge:
+      j.value = std::clamp(hinge_angle(j.hinge, parent, child, 0.0), j.hinge.lower, j.hinge.upper);
+      break;
+    case JointType::Slider:
+      j.value = std::clamp(slider_displacement(j.slider, parent, child), j.slider.lower, j.slider.upper);
+      break;
+    case JointType::Ball: {
+      BallSolveResult r = solve_ball_exact(j.ball, j.vertices.moments, parent, child, Quat::Identity());
+      j.rotation = r.rotation;
+      break;
+    }
+    case JointType::Fixed:
+      break;
+  }
+}
+}  // namespace
+
+JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const std::string& arg) {
+  Body& c = body(child_id, (arg + ".child").c_str());
+  if (!parent_id.is_null()) body(parent_id, (arg + ".parent").c_str());
+  if (c.declared != BodyMotion::Dynamic)
+    validate::fail(arg + ".child", "must be a dynamic body (mass > 0, not kinematic)", Status::InvalidState);
+#if !HANDSIM_WITH_CERES
+  if (j.solver == JointSolver::LmCeres)
+    validate::fail(arg + ".solver", "LmCeres needs a build with HANDSIM_WITH_CERES", Status::Unsupported);
+#endif
+  j.parent = parent_id.is_null() ? kWorldParent : parent_id.index;
+  j.child = child_id.index;
+  if (j.model == JointModel::Hard) {
+    if (c.hard_joint >= 0)
+      validate::fail(arg + ".child", "is already the child of a hard joint", Status::InvalidState);
+    // Walking up from the parent must not reach the child, or the group would be a loop.
+    for (uint32_t p = j.parent; p != kWorldParent;) {
+      if (p == j.child) validate::fail(arg + ".parent", "is a descendant of the child: a loop", Status::InvalidState);
+      p = bodies[p].hard_joint < 0 ? kWorldParent : joints[bodies[p].hard_joint].parent;
+    }
+  } else if (c.soft_joint >= 0 || c.hard_joint >= 0) {
+    validate::fail(arg + ".child", "is already the child of a joint", Status::InvalidState);
+  }
+  j.vertices = make_joint_vertices(model_vertices(c.shape), Eigen::VectorXd(), joint_point_on_child(j));
+  Vec3 lo, hi;
+  shape_local_bounds(c.shape, lo, hi);
+  j.length = 0.5 * (hi - lo).norm();
+  read_coordinate(j, parent_pose(j), c.pose);
+
+  // Everything validated: from here on the world changes.
+  const uint32_t index = [&] {
+    if (!free_joint_slots.empty()) {
+      uint32_t k = free_joint_slots.back();
+      free_joint_slots.pop_back();
+      return k;
+    }
+    joints.emplace_back();
+    joints.back().generation = first_generation(salt);
+    return uint32_t(joints.size() - 1);
+  }();
+  j.generation = joints[index].generation;
+  j.alive = true;
+  const int parent_backend = j.parent == kWorldParent ? -1 : bodies[j.parent].backend;
+  if (j.model == JointModel::Hard) {
+    c.hard_joint = int(index);
+    if (!c.grasp.grasped) set_motion(c, BodyMotion::Kinematic);
+    if (parent_backend >= 0) backend->set_collision(parent_backend, c.backend, false);
+    joints[index] = std::move(j);
+    rebuild_joint_order();
+    place_children();  // the child snaps onto its joint
+  } else {
+    switch (j.type) {
+      case JointType::Hinge: j.constraint = backend->add_hinge(parent_backend, c.backend, j.hinge); break;
+      case JointType::Slider: j.constraint = backend->add_slider(parent_backend, c.backend, j.slider); break;
+      case JointType::Ball: j.constraint = backend->add_ball(parent_backend, c.backend, j.ball); break;
+      case JointType::Fixed: j.constraint = backend->add_fixed(parent_backend, c.backend, j.fixed); break;
+    }
+    c.soft_joint = int(index);
+    joints[index] = std::move(j);
+  }
+  return joint_id(index);
+}
+
+void World::Impl::rebuild_joint_order() {
+  joint_order.clear();
+  std::function<int(uint32_t)> depth = [&](uint32_t k) {
+    const Joint& j = joints[k];
+    if (j.parent == kWorldParent || bodies[j.parent].hard_joint < 0) return 0;
+    return depth(uint32_t(bodies[j.parent].hard_joint)) + 1;
+  };
+  for (uint32_t k = 0; k < joints.size(); ++k)
+    if (joints[k].alive && joints[k].model == JointModel::Hard) {
+      joints[k].depth = depth(k);
+      joint_order.push_back(k);
+    }
+  std::stable_sort(joint_order.begin(), joint_order.end(),
+                   [&](uint32_t a, uint32_t b) { return joints[a].depth < joints[b].depth; });
+}
+
+// --- placing hard children ---
+
+void World::Impl::place_children() {
+  for (uint32_t k : joint_order) {
+    const Joint& j = joints[k];
+    Body& c = bodies[j.child];
+    const Pose p = parent_pose(j);
+    c.pose = joint_child_pose(j);
+    // The child's velocity: the parent's rigid motion plus the joint's own.
+    Vec3 v = Vec3::Zero(), w = Vec3::Zero();
+    if (j.parent != kWorldParent) {
+      const Body& pb = bodies[j.parent];
+      w = pb.angular;
+      v = pb.linear + pb.angular.cross(c.pose.position - pb.pose.position);
+    }
+    switch (j.type) {
+      case JointType::Hinge: {
+        const Vec3 a = p.orientation * j.hinge.axis_parent;
+        w += j.rate * a;
+        v += j.rate * a.cross(c.pose.position - p.transform(j.hinge.pivot_parent));
+        break;
+      }
+      case JointType::Slider:
+        v += j.rate * (p.orientation * j.slider.axis);
+        break;
+      case JointType::Ball:
+        w += j.spin;
+        v += j.spin.cross(c.pose.position - p.transform(j.ball.pivot_parent));
+        break;
+      case JointType::Fixed:
+        break;
+    }
+    c.linear = v;
+    c.angular = w;
+    backend->move_kinematic(c.backend, c.pose);
+  }
+}
+
+// --- free dynamics of hard joints (one substep) ---
+
+void World::Impl::integrate_joints(double h) {
+  for (uint32_t k : joint_order) {
+    Joint& j = joints[k];
+    const Body& c = bodies[j.child];
+    if (c.grasp.grasped || j.type == JointType::Fixed) continue;  // held: the hand decides (solve_joints)
+    const Vec3 g = c.supported ? Vec3::Zero() : def.gravity;
+    const Pose p = parent_pose(j);
+    const Pose now = joint_child_pose(j);
+    const double m = c.mass;
+    if (j.type == JointType::Hinge) {
+      // One rotational DOF: I_axis theta'' = torque of gravity about the axis - damping theta'.
+      const Vec3 a = p.orientation * j.hinge.axis_parent;
+      const Vec3 r = now.position - p.transform(j.hinge.pivot_parent);
+      Body moved = c;
+      moved.pose = now;
+      const double inertia = a.dot(world_inertia(moved) * a) + m * (r.squaredNorm() - std::pow(r.dot(a), 2));
+      const double torque = a.dot(r.cross(m * g));
+      j.rate += h * (torque - j.damping * j.rate) / std::max(inertia, 1e-12);
+      j.value += h * j.rate;
+      clamp_coordinate(j.value, j.rate, j.hinge.lower, j.hinge.upper);
+    } else if (j.type == JointType::Slider) {
+      const Vec3 a = p.orientation * j.slider.axis;
+      j.rate += h * (m * g.dot(a) - j.damping * j.rate) / m;
+      j.value += h * j.rate;
+      clamp_coordinate(j.value, j.rate, j.slider.lower, j.slider.upper);
+    } else {
+      // Three rotational DOFs about the pivot: Euler's equations with the inertia about the pivot.
+      const Vec3 r = now.position - p.transform(j.ball.pivot_parent);
+      Body moved = c;
+      moved.pose = now;
+      const Mat3 inertia = world_inertia(moved) + m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+      const Vec3 torque = r.cross(m * g) - j.damping * j.spin - j.spin.cross(inertia * j.spin);
+      j.spin += h * inertia.ldlt().solve(torque);
+      const Quat turn(Eigen::AngleAxisd(h * j.spin.norm(), j.spin.normalized()));
+      const Quat world_rel = j.spin.norm() > 0 ? turn : Quat::Identity();
+      Quat next = (p.orientation.conjugate() * world_rel * p.orientation * j.rotation).normalized();
+      if (j.ball.cone_half_angle < M_PI) {
+        // Project onto the cone (exact solver on the free pose) and keep only the motion that remains.
+        const BallSolveResult r2 =
+            solve_ball_exact(j.ball, j.vertices.moments, p, ball_child_pose(j.ball, p, next), j.rotation);
+        if (r2.termination == JointTermination::AtLimit) {
+          next = r2.rotation;
+          j.spin = rotation_vector(p.orientation * next * (p.orientation * j.rotation).conjugate()) / h;
+        }
+      }
+      j.rotation = next;
+    }
+  }
+}
+
+// --- soft joints: a grasped child chases its hand with a velocity, the constraint pulls back ---
+
+void World::Impl::drive_soft_children(double h) {
+  for (Body& b : bodies) {
+    if (!b.alive || b.soft_joint < 0 || !b.grasp.grasped) continue;
+    const Pose target = hands[b.grasp.primary.index].palm * b.grasp.primary_relative;
+    b.linear = (target.position - b.pose.position) / h;
+    b.angular = rotation_vector(target.orientation * b.pose.orientation.conjugate()) / h;
+    backend->write(b.backend, b.pose, b.linear, b.angular);
+  }
+}
+
+// --- the micro-simulator (eq. 4) and the projection of a push ---
+
+namespace {
+void record(Joint& j, const JointSolveResult& r) {
+  j.last = r;
+  j.solved = true;
+}
+void record(Joint& j, const BallSolveResult& r) {
+  j.last = {0.0, r.cost, r.iterations, r.termination, r.seconds};
+  j.solved = true;
+}
+}  // namespace
+
+// Where the hand wants the child (`simulated`) -> the nearest coordinate (eq. 4), with the rate that gets
+// there over dt. A pushed child gets only the rate, so the push acts like a velocity and gravity and limits
+// still apply (project_push); a grasped child is set there at once (solve_grasped).
+void World::Impl::project_push(Joint& j, const Pose& simulated, double dt) {
+  const Pose p = parent_pose(j);
+  const JointSolveOptions o = joint_options();
+  switch (j.type) {
+    case JointType::Hinge:
+    case JointType::Slider: {
+      const JointSolveResult r = j.type == JointType::Hinge
+                                     ? solve_hinge(j.solver, j.hinge, j.vertices, p, simulated, j.value, o)
+                                     : solve_slider(j.solver, j.slider, j.vertices, p, simulated, j.value, o);
+      j.rate = (r.value - j.value) / dt;
+      record(j, r);
+      break;
+    }
+    case JointType::Ball: {
+      const BallSolveResult r = solve_ball_exact(j.ball, j.vertices.moments, p, simulated, j.rotation, o);
+      j.spin = rotation_vector(p.orientation * r.rotation * (p.orientation * j.rotation).conjugate()) / dt;
+      record(j, r);
+      break;
+    }
+    case JointType::Fixed:
+      break;
+  }
+}
+
+void World::Impl::solve_grasped(Joint& j, const Pose& simulated, double dt) {
+  project_push(j, simulated, dt);
+  if (!j.solved) return;
+  if (j.type == JointType::Ball) {
+    // The solved rotation itself (re-deriving it from spin * dt would round).
+    const Pose p = parent_pose(j);
+    j.rotation = solve_ball_exact(j.ball, j.vertices.moments, p, simulated, j.rotation, joint_options()).rotation;
+  } else {
+    j.value = j.last.value;
+  }
+}
+
+void World::Impl::read_soft_joint(Joint& j) {
+  const Pose p = parent_pose(j), c = bodies[j.child].pose;
+  switch (j.type) {
+    case JointType::Hinge: j.value = hinge_angle(j.hinge, p, c, j.value); break;
+    case JointType::Slider: j.value = slider_displacement(j.slider, p, c); break;
+    case JointType::Ball: j.rotation = ball_rotation(j.ball, p, c); break;
+    case JointType::Fixed: break;
+  }
+}
+
+// --- line 19 of Algorithm 1: grasped children of hard joints get their coordinate from the hand ---
+std::string World::Impl::solve_joints(double dt) {
+  int live = 0, solved = 0;
+  for (uint32_t k : joint_order) {
+    Joint& j = joints[k];
+    const Body& c = bodies[j.child];
+    if (!c.grasp.grasped) continue;
+    const Pose simulated = hands[c.grasp.primary.index].palm * c.grasp.primary_relative;
+    solve_grasped(j, simulated, dt);
+    solved += j.solved;
+  }
+  if (!joint_order.empty()) place_children();
+  for (Joint& j : joints) {
+    if (!j.alive) continue;
+    ++live;
+    if (j.model == JointModel::Soft) read_soft_joint(j);
+  }
+  if (live == 0) return "skip: no joints";
+  return std::to_string(live) + " joint(s), " + std::to_string(solved) + " grasped child(ren) solved";
+}
+
+// --- public API ---
+
+namespace {
+template <class Def>
+Joint joint_from(JointType type, const Def& d) {
+  Joint j;
+  j.type = type;
+  j.model = d.model;
+  return j;
+}
+}  // namespace
+
+JointId World::add_joint(const HingeDef& d) {
+  Joint j = joint_from(JointType::Hinge, d);
+  j.hinge = make_hinge_frame(d, "hinge");
+  j.solver = d.solver;
+  j.damping = d.damping;
+  return impl_->add_joint(std::move(j), d.parent, d.child, "hinge");
+}
+
+JointId World::add_joint(const SliderDef& d) {
+  Joint j = joint_from(JointType::Slider, d);
+  j.slider = make_slider_frame(d, "slider");
+  j.solver = d.solver;
+  j.damping = d.damping;
+  return impl_->add_joint(std::move(j), d.parent, d.child, "slider");
+}
+
+JointId World::add_joint(const BallDef& d) {
+  Joint j = joint_from(JointType::Ball, d);
+  j.ball = make_ball_frame(d, "ball");
+  j.solver = d.solver;
+  j.damping = d.damping;
+  return impl_->add_joint(std::move(j), d.parent, d.child, "ball");
+}
+
+JointId World::add_joint(const FixedDef& d) {
+  Joint j = joint_from(JointType::Fixed, d);
+  j.fixed = make_fixed_frame(d, "fixed");
+  return impl_->add_joint(std::move(j), d.parent, d.child, "fixed");
+}
+
+void World::remove_joint(JointId id) {
+  Impl& w = *impl_;
+  Joint& j = w.joint(id);
+  Body& c = w.bodies[j.child];
+  if (j.model == JointModel::Hard) {
+    c.hard_joint = -1;
+    if (j.parent != kWorldParent) w.backend->set_collision(w.bodies[j.parent].backend, c.backend, true);
+    // The child flies on with the velocity the joint gave it (place_children keeps it current).
+    if (!c.grasp.grasped) {
+      w.set_motion(c, BodyMotion::Dynamic);
+      w.backend->write(c.backend, c.pose, c.linear, c.angular);
+    }
+  } else {
+    w.backend->remove_constraint(j.constraint);
+    c.soft_joint = -1;
+  }
+  const uint32_t generation = next_generation(j.generation);
+  j = Joint();
+  j.generation = generation;
+  w.free_joint_slots.push_back(id.index);
+  w.rebuild_joint_order();
+}
+
+bool World::contains(JointId id) const {
+  return !id.is_null() && id.index < impl_->joints.size() && impl_->joints[id.index].alive &&
+         impl_->joints[id.index].generation == id.generation;
+}
+
+std::vector<JointId> World::joints() const {
+  std::vector<JointId> out;
+  for (uint32_t k = 0; k < impl_->joints.size(); ++k)
+    if (impl_->joints[k].alive) out.push_back(impl_->joint_id(k));
+  return out;
+}
+
+JointState World::joint_state(JointId id) const {
+  const Impl& w = *impl_;
+  const Joint& j = w.joint(id);
+  JointState s;
+  s.type = j.type;
+  s.model = j.model;
+  s.solver = j.solver;
+  s.parent = j.parent == kWorldParent ? BodyId{} : w.body_id(j.parent);
+  s.child = w.body_id(j.child);
+  s.value = j.value;
+  s.rate = j.rate;
+  s.rotation = j.rotation;
+  const Pose p = w.parent_pose(j), c = w.bodies[j.child].pose;
+  switch (j.type) {
+    case JointType::Hinge: {
+      s.violation = hinge_violation(j.hinge, p, c, j.length);
+      const double theta = hinge_angle(j.hinge, p, c, j.value);
+      s.overshoot = std::max({0.0, j.hinge.lower - theta, theta - j.hinge.upper});
+      break;
+    }
+    case JointType::Slider: {
+      s.violation = slider_violation(j.slider, p, c, j.length);
+      const double d = slider_displacement(j.slider, p, c);
+      s.overshoot = std::max({0.0, j.slider.lower - d, d - j.slider.upper});
+      break;
+    }
+    case JointType::Ball: {
+      s.violation = ball_violation(j.ball, p, c);
+      if (j.ball.cone_half_angle < M_PI) {
+        const Vec3 axis = j.ball.cone_axis, swung = ball_rotation(j.ball, p, c) * axis;
+        const double swing = std::atan2(axis.cross(swung).norm(), axis.dot(swung));
+        s.overshoot = std::max(0.0, swing - j.ball.cone_half_angle);
+      }
+      break;
+    }
+    case JointType::Fixed:
+      s.violation = fixed_violation(j.fixed, p, c, j.length);
+      break;
+  }
+  s.solved = j.solved;
+  s.cost = j.last.cost;
+  s.iterations = j.last.iterations;
+  s.termination = j.last.termination;
+  s.solve_seconds = j.last.seconds;
+  return s;
+}
+
+void World::set_joint_value(JointId id, double value) {
+  Impl& w = *impl_;
+  Joint& j = w.joint(id);
+  validate::finite(value, "value");
+  if (j.type != JointType::Hinge && j.type != JointType::Slider)
+    validate::fail("joint", "only a hinge or a slider has a single coordinate", Status::InvalidState);
+  const double lower = j.type == JointType::Hinge ? j.hinge.lower : j.slider.lower;
+  const double upper = j.type == JointType::Hinge ? j.hinge.upper : j.slider.upper;
+  j.value = std::clamp(value, lower, upper);
+  j.rate = 0;
+  if (j.model == JointModel::Hard) {
+    w.place_children();
+    return;
+  }
+  Body& c = w.bodies[j.child];
+  c.pose = c.synced_pose = w.joint_child_pose(j);
+  c.linear = c.angular = Vec3::Zero();
+  w.backend->write(c.backend, c.pose, c.linear, c.angular);
+}
+
+}  // namespace handsim

@@ -1,0 +1,358 @@
+// Jointed objects in the world: hard groups never leave their joint or pass a limit, free joints follow
+// analytic dynamics, the micro-simulator moves a grasped lid, bad joint definitions are rejected.
+#include "handsim/scenes.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace handsim;
+
+namespace {
+
+constexpr double kDt = 1.0 / 60.0;
+constexpr double kDeg = M_PI / 180.0;
+
+BodyDef box_body(const Vec3& half, const Vec3& position, double mass) {
+  BodyDef d;
+  d.shape = ShapeDef::box(half);
+  d.pose.position = position;
+  d.mass = mass;
+  return d;
+}
+
+// A rod hanging from a world hinge: the classic compound pendulum.
+struct Pendulum {
+  World world{[] {
+    WorldDef d;
+    d.ground = false;
+    return d;
+  }()};
+  BodyId rod;
+  JointId hinge;
+  double length = 0.4;
+
+  explicit Pendulum(double angle0, double lower = -kUnlimited, double upper = kUnlimited) {
+    rod = world.add_body(box_body(Vec3(0.01, 0.5 * length, 0.01), Vec3(0, -0.5 * length, 0), 1.0));
+    HingeDef h;
+    h.child = rod;
+    h.pivot_parent = Vec3::Zero();
+    h.axis_parent = Vec3::UnitZ();
+    h.pivot_child = Vec3(0, 0.5 * length, 0);
+    h.axis_child = Vec3::UnitZ();
+    h.lower = lower;
+    h.upper = upper;
+    hinge = world.add_joint(h);
+    world.set_joint_value(hinge, angle0);
+  }
+};
+
+}  // namespace
+
+TEST(JointsWorld, CompoundPendulumPeriodMatchesAnalytic) {
+  Pendulum p(2 * kDeg);
+  // Small-angle period of a slender box rod about its end: 2 pi sqrt(I / (m g d)).
+  const double L = p.length, w = 0.02;
+  const double inertia = (L * L + w * w) / 12.0 + 0.25 * L * L;  // per kg, about the pivot
+  const double period = 2 * M_PI * std::sqrt(inertia / (9.81 * 0.5 * L));
+  // Zero crossings from + to -.
+  std::vector<double> crossings;
+  double previous = p.world.joint_state(p.hinge).value;
+  for (int i = 0; i < 600; ++i) {
+    p.world.step(kDt);
+    const JointState s = p.world.joint_state(p.hinge);
+    if (previous > 0 && s.value <= 0) crossings.push_back(p.world.time());
+    previous = s.value;
+    ASSERT_LE(s.violation, 1e-12);
+  }
+  ASSERT_GE(crossings.size(), 3u);
+  const double measured = (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  EXPECT_NEAR(measured, period, 0.01 * period);
+}
+
+TEST(JointsWorld, FallingPendulumStopsAtItsLimitAndStaysOnTheHinge) {
+  Pendulum p(80 * kDeg, -30 * kDeg, 85 * kDeg);
+  double lowest = 1e9;
+  for (int i = 0; i < 600; ++i) {
+    p.world.step(kDt);
+    const JointState s = p.world.joint_state(p.hinge);
+    lowest = std::min(lowest, s.value);
+    ASSERT_GE(s.value, -30 * kDeg - 1e-12);
+    ASSERT_EQ(s.overshoot, 0.0);
+    ASSERT_LE(s.violation, 1e-12);
+  }
+  EXPECT_NEAR(lowest, -30 * kDeg, 1e-12);  // it swung down through 0 and hit the lower limit
+}
+
+TEST(JointsWorld, ClosedLidRestsAndOpenLidFallsShutWithoutPassingTheLimit) {
+  World world;
+  JewelryBox box = build_jewelry_box(world);
+  for (int i = 0; i < 60; ++i) world.step(kDt);
+  EXPECT_NEAR(world.joint_state(box.hinge).value, 0.0, 1e-12);
+  world.set_joint_value(box.hinge, 60 * kDeg);
+  double previous = 60 * kDeg;
+  bool closed = false;
+  for (int i = 0; i < 120; ++i) {
+    world.step(kDt);
+    const JointState s = world.joint_state(box.hinge);
+    ASSERT_GE(s.value, 0.0);
+    ASSERT_LE(s.value, previous + 1e-12);  // falls monotonically: the stop at 0 is inelastic
+    ASSERT_LE(s.violation, 1e-9);
+    previous = s.value;
+    closed = closed || s.value == 0.0;
+  }
+  EXPECT_TRUE(closed);
+}
+
+TEST(JointsWorld, LidOpenAtItsUpperLimitStaysThere) {
+  World world;
+  JewelryBox box = build_jewelry_box(world);
+  world.set_joint_value(box.hinge, 200 * kDeg);  // clamped
+  EXPECT_EQ(world.joint_state(box.hinge).value, 0.5 * M_PI);
+  for (int i = 0; i < 120; ++i) world.step(kDt);
+  // Upright, the lid's centre of mass is just behind the hinge line, so gravity holds it on the limit.
+  EXPECT_NEAR(world.joint_state(box.hinge).value, 0.5 * M_PI, 1e-12);
+  EXPECT_EQ(world.joint_state(box.hinge).overshoot, 0.0);
+}
+
+TEST(JointsWorld, GroupRidesOnItsParent) {
+  World world;
+  JewelryBox box = build_jewelry_box(world);
+  world.set_joint_value(box.hinge, 30 * kDeg);
+  Pose moved = world.body_pose(box.base);
+  moved.position += Vec3(0.05, 0, 0.02);
+  moved.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()));
+  world.set_body_pose(box.base, moved);
+  const JointState s = world.joint_state(box.hinge);
+  EXPECT_NEAR(s.value, 30 * kDeg, 1e-15);
+  EXPECT_LE(s.violation, 1e-12);
+}
+
+TEST(JointsWorld, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHinge) {
+  World world;
+  JewelryBox box = build_jewelry_box(world);
+  HandId hand = world.add_hand(HandDef{});
+  const HandPoseParams shape = lid_pinch_shape();
+  double max_value = 0, max_violation = 0;
+  bool grasped = false;
+  // Close in for 10 frames, then swing the hand 180 degrees about the hinge over 3 s, and back, and again:
+  // 10,000 frames in all.
+  for (int i = 0; i < 10000; ++i) {
+    const double phase = std::max(0, i - 10) / 180.0;  // 3 s per half swing
+    const double angle = M_PI * (1 - std::cos(M_PI * std::fmod(phase, 2.0))) / 2;
+    const Pose palm = box.lid_pinch_palm(world, Handedness::Right, angle);
+    world.step(kDt, {make_hand_frame(Handedness::Right, palm, shape)});
+    const JointState s = world.joint_state(box.hinge);
+    grasped = grasped || world.body_grasp(box.lid).grasped;
+    max_value = std::max(max_value, s.value);
+    max_violation = std::max(max_violation, s.violation);
+    ASSERT_LE(s.value, 0.5 * M_PI) << "frame " << i;
+    ASSERT_GE(s.value, 0.0) << "frame " << i;
+  }
+  (void)hand;
+  EXPECT_TRUE(grasped);
+  EXPECT_NEAR(max_value, 0.5 * M_PI, 1e-12);  // the hand did drag it to the limit
+  EXPECT_LE(max_violation, 1e-9);
+}
+
+TEST(JointsWorld, GraspedLidFollowsTheHandArcWithinLimits) {
+  World world;
+  JewelryBox box = build_jewelry_box(world);
+  world.add_hand(HandDef{});
+  const HandPoseParams shape = lid_pinch_shape();
+  for (int i = 0; i < 70; ++i) {
+    const double angle = std::clamp((i - 10) / 60.0, 0.0, 1.0) * 60 * kDeg;
+    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle), shape)});
+  }
+  const JointState s = world.joint_state(box.hinge);
+  EXPECT_TRUE(world.body_grasp(box.lid).grasped);
+  EXPECT_TRUE(s.solved);
+  // The hand holds the lid where it grabbed it, so the lid follows the hand's swing about the hinge.
+  EXPECT_NEAR(s.value, 60 * kDeg, 2 * kDeg);
+}
+
+TEST(JointsWorld, LidPushedOpenByAFlatHandTurnsOnItsHinge) {
+  World world;
+  JewelryBoxDef def;
+  def.base_mass = 0;  // the hand touches only the lid's lip; a fixed base keeps the test about the lid
+  JewelryBox box = build_jewelry_box(world, def);
+  world.add_hand(HandDef{});
+  // A flat hand, palm up, fingertips under the lip, rising 9 cm at a steady 9 cm/s: it pushes without
+  // grasping.
+  const Vec3 front = box.lid_front(world);
+  double max_value = 0;
+  for (int i = 0; i < 60; ++i) {
+    const double rise = i * 0.0015;
+    Pose palm{front + Vec3(0, -def.lid_half_thickness - 0.012 + rise, 0.11),
+              Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitZ()))};
+    world.step(kDt, {make_hand_frame(Handedness::Right, palm, HandPoseParams{})});
+    const JointState s = world.joint_state(box.hinge);
+    max_value = std::max(max_value, s.value);
+    ASSERT_LE(s.violation, 1e-9);
+    ASSERT_FALSE(world.body_grasp(box.lid).grasped);
+  }
+  EXPECT_GT(max_value, 30 * kDeg);
+}
+
+TEST(JointsWorld, SliderFallsLikeAFreeBodyUntilItsLimit) {
+  WorldDef wd;
+  wd.ground = false;
+  World world(wd);
+  BodyId block = world.add_body(box_body(Vec3::Constant(0.02), Vec3::Zero(), 0.3));
+  SliderDef s;
+  s.child = block;
+  s.axis = Vec3::UnitY();
+  s.lower = -0.5;
+  s.upper = 0.5;
+  JointId slider = world.add_joint(s);
+  world.step(0.25);  // 60 substeps would exceed max_substeps; use frames
+  for (int i = 0; i < 14; ++i) world.step(kDt);
+  const double t = world.time() - 0.25 + 8 * wd.fixed_substep;  // the first frame ran max_substeps only
+  const JointState st = world.joint_state(slider);
+  EXPECT_NEAR(st.value, -0.5 * 9.81 * t * t, 0.01 * 0.5 * 9.81 * t * t + 2e-3);
+  for (int i = 0; i < 120; ++i) world.step(kDt);
+  EXPECT_EQ(world.joint_state(slider).value, -0.5);
+  EXPECT_LE(world.joint_state(slider).violation, 1e-12);
+  EXPECT_NEAR(world.body_pose(block).position.x(), 0.0, 1e-15);
+}
+
+TEST(JointsWorld, BallJointSettlesOnItsConeWhenGravityPullsOutside) {
+  WorldDef wd;
+  wd.ground = false;
+  World world(wd);
+  // At rest (R = identity) the bob hangs 40 degrees off vertical and may swing 30 degrees from there:
+  // gravity pulls it towards the cone's edge.
+  const Quat tilt(Eigen::AngleAxisd(40 * kDeg, Vec3::UnitZ()));
+  BodyDef bd = box_body(Vec3(0.01, 0.1, 0.01), tilt * Vec3(0, -0.1, 0), 1.0);
+  bd.pose.orientation = tilt;
+  BodyId bob = world.add_body(bd);
+  BallDef b;
+  b.child = bob;
+  b.pivot_child = Vec3(0, 0.1, 0);
+  b.rest_orientation = tilt;
+  b.pivot_parent = Vec3::Zero();
+  b.cone_axis = -Vec3::UnitY();
+  b.cone_half_angle = 30 * kDeg;
+  b.damping = 0.001;
+  JointId ball = world.add_joint(b);
+  double max_violation = 0;
+  for (int i = 0; i < 300; ++i) {
+    world.step(kDt);
+    const JointState s = world.joint_state(ball);
+    ASSERT_LE(s.overshoot, 1e-12) << "frame " << i;
+    max_violation = std::max(max_violation, s.violation);
+  }
+  EXPECT_LE(max_violation, 1e-12);
+  // At rest on the cone's lowest line: 10 degrees from vertical.
+  const Vec3 down = world.body_pose(bob).orientation * -Vec3::UnitY();
+  EXPECT_NEAR(std::acos(-down.y()), 10 * kDeg, 0.5 * kDeg);
+}
+
+TEST(JointsWorld, FixedChildFollowsItsParentExactly) {
+  World world;
+  BodyId a = world.add_body(box_body(Vec3::Constant(0.05), Vec3(0, 1, 0), 1.0));
+  BodyId b = world.add_body(box_body(Vec3::Constant(0.02), Vec3(0.07, 1, 0), 0.2));
+  FixedDef f;
+  f.parent = a;
+  f.child = b;
+  f.relative.position = Vec3(0.07, 0, 0);
+  JointId fixed = world.add_joint(f);
+  for (int i = 0; i < 120; ++i) world.step(kDt);  // the parent falls and lands; the child rides along
+  const Pose pa = world.body_pose(a), pb = world.body_pose(b);
+  EXPECT_NEAR(pa.position.y(), 0.05, 2e-3);
+  EXPECT_LE((pa.transform(Vec3(0.07, 0, 0)) - pb.position).norm(), 1e-12);
+  EXPECT_LE(world.joint_state(fixed).violation, 1e-12);
+}
+
+TEST(JointsWorld, SoftHingeBaselineRunsAndIsMeasured) {
+  World world;
+  JewelryBoxDef def;
+  def.model = JointModel::Soft;
+  JewelryBox box = build_jewelry_box(world, def);
+  world.set_joint_value(box.hinge, 60 * kDeg);
+  double max_violation = 0;
+  for (int i = 0; i < 120; ++i) {
+    world.step(kDt);
+    max_violation = std::max(max_violation, world.joint_state(box.hinge).violation);
+  }
+  EXPECT_NEAR(world.joint_state(box.hinge).value, 0.0, 3 * kDeg);  // it fell shut
+  EXPECT_GT(max_violation, 0.0);    // Bullet's constraint is soft: it stretches a little
+  EXPECT_LT(max_violation, 0.01);   // but holds together when nothing pulls on it
+}
+
+TEST(JointsWorld, BadJointDefinitionsAreRejectedAndTheWorldIsUnchanged) {
+  World world;
+  BodyId a = world.add_body(box_body(Vec3::Constant(0.05), Vec3(0, 0.05, 0), 1.0));
+  BodyId b = world.add_body(box_body(Vec3::Constant(0.05), Vec3(0, 0.2, 0), 1.0));
+  BodyId fixed_body = world.add_body(box_body(Vec3::Constant(0.05), Vec3(1, 0.05, 0), 0.0));
+  const uint64_t hash = world.state_hash();
+  auto expect_error = [&](HingeDef h, const std::string& argument, Status status) {
+    try {
+      world.add_joint(h);
+      ADD_FAILURE() << "accepted a bad hinge: " << argument;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), status) << e.what();
+      EXPECT_EQ(e.argument(), argument) << e.what();
+    }
+    EXPECT_EQ(world.state_hash(), hash);
+    EXPECT_TRUE(world.joints().empty());
+  };
+  HingeDef good;
+  good.parent = a;
+  good.child = b;
+  HingeDef h = good;
+  h.axis_parent = Vec3::Zero();
+  expect_error(h, "hinge.axis_parent", Status::InvalidArgument);
+  h = good;
+  h.lower = 1;
+  h.upper = 0;
+  expect_error(h, "hinge.lower", Status::InvalidArgument);
+  h = good;
+  h.pivot_parent.x() = NAN;
+  expect_error(h, "hinge.pivot_parent", Status::InvalidArgument);
+  h = good;
+  h.child = a;
+  expect_error(h, "hinge.child", Status::InvalidArgument);
+  h = good;
+  h.child = fixed_body;
+  expect_error(h, "hinge.child", Status::InvalidState);
+  h = good;
+  h.upper = 7;
+  h.lower = 0;
+  expect_error(h, "hinge.upper", Status::InvalidArgument);
+  h = good;
+  h.parent = BodyId{77, 3};
+  expect_error(h, "hinge.parent", Status::StaleId);
+
+  JointId j = world.add_joint(good);
+  const uint64_t with_joint = world.state_hash();
+  HingeDef loop;
+  loop.parent = b;
+  loop.child = a;
+  try {
+    world.add_joint(loop);
+    ADD_FAILURE() << "accepted a loop";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::InvalidState) << e.what();
+  }
+  EXPECT_THROW(world.add_joint(good), Error);  // second hard joint on the same child
+  EXPECT_THROW(world.remove_body(b), Error);   // a joint still uses it
+  EXPECT_THROW(world.set_body_pose(b, Pose{}), Error);
+  EXPECT_THROW(world.set_joint_value(j, NAN), Error);
+  EXPECT_EQ(world.state_hash(), with_joint);
+  world.remove_joint(j);
+  EXPECT_FALSE(world.contains(j));
+  EXPECT_THROW(world.joint_state(j), Error);  // stale
+  world.remove_body(b);                        // free again
+}
+
+TEST(JointsWorld, RemovedJointLeavesAFreeBodyWithItsVelocity) {
+  Pendulum p(60 * kDeg);
+  for (int i = 0; i < 10; ++i) p.world.step(kDt);
+  const Vec3 v = p.world.body_linear_velocity(p.rod);
+  EXPECT_GT(v.norm(), 0.1);
+  p.world.remove_joint(p.hinge);
+  EXPECT_EQ(p.world.body_motion(p.rod), BodyMotion::Dynamic);
+  p.world.step(kDt);
+  EXPECT_NEAR((p.world.body_linear_velocity(p.rod) - v).norm(), 9.81 * kDt, 0.05);
+}
