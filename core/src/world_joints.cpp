@@ -55,6 +55,11 @@ Mat3 world_inertia(const Body& b) {
   return R * (b.mass * b.unit_inertia).asDiagonal() * R.transpose();
 }
 
+// One damped velocity update, with the damping taken implicitly: rate' = (rate + impulse) / (1 + k),
+// k = h c / I. An explicit update diverges once k > 2, which a light lid with a stiff hinge reaches easily
+// (a 0.5 g lid with 0.002 N m s damping has k ~ 11 at 240 Hz); the implicit one is stable for any k.
+double implicit_damped(double rate, double impulse, double k) { return (rate + impulse) / (1 + k); }
+
 double clamp_coordinate(double& value, double& rate, double lower, double upper) {
   // An inelastic stop: the rate into the limit is removed.
   if (value < lower) {
@@ -263,12 +268,12 @@ void World::Impl::integrate_joints(double h) {
       moved.pose = now;
       const double inertia = a.dot(world_inertia(moved) * a) + m * (r.squaredNorm() - std::pow(r.dot(a), 2));
       const double torque = a.dot(r.cross(m * g));
-      j.rate += h * (torque - j.damping * j.rate) / std::max(inertia, 1e-12);
+      j.rate = implicit_damped(j.rate, h * torque / inertia, h * j.damping / inertia);
       j.value += h * j.rate;
       clamp_coordinate(j.value, j.rate, j.hinge.lower, j.hinge.upper);
     } else if (j.type == JointType::Slider) {
       const Vec3 a = p.orientation * j.slider.axis;
-      j.rate += h * (m * g.dot(a) - j.damping * j.rate) / m;
+      j.rate = implicit_damped(j.rate, h * g.dot(a), h * j.damping / m);
       j.value += h * j.rate;
       clamp_coordinate(j.value, j.rate, j.slider.lower, j.slider.upper);
     } else {
@@ -277,8 +282,9 @@ void World::Impl::integrate_joints(double h) {
       Body moved = c;
       moved.pose = now;
       const Mat3 inertia = world_inertia(moved) + m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-      const Vec3 torque = r.cross(m * g) - j.damping * j.spin - j.spin.cross(inertia * j.spin);
-      j.spin += h * inertia.ldlt().solve(torque);
+      // Damping implicit (I + h c) w' = I w + h tau, for the same reason as implicit_damped.
+      const Vec3 torque = r.cross(m * g) - j.spin.cross(inertia * j.spin);
+      j.spin = (inertia + h * j.damping * Mat3::Identity()).ldlt().solve(inertia * j.spin + h * torque);
       const Quat turn(Eigen::AngleAxisd(h * j.spin.norm(), j.spin.normalized()));
       const Quat world_rel = j.spin.norm() > 0 ? turn : Quat::Identity();
       Quat next = (p.orientation.conjugate() * world_rel * p.orientation * j.rotation).normalized();
