@@ -50,6 +50,13 @@ struct JewelryBox {
 // The hand shape lid_pinch_palm is made for: thumb half opposed, fingers straight.
 HandPoseParams lid_pinch_shape();
 
+// The scripted two-hand jewelry-box scenario that determinism tests and every driver (C++, Python, C, C#)
+// replay: frame i (60 Hz) of a world built with build_jewelry_box(world) and, in this order, a right and a
+// left hand (HandDef defaults). The right hand pinches the lid, swings it open to 80 deg and back; the left
+// hand rests on the base's side, then leaves. kScenarioFrames frames make one run.
+constexpr int kScenarioFrames = 1000;
+std::vector<HandFrame> scenario_frames(const JewelryBox& box, const World& world, int frame);
+
 // Adds the table (optional), the base, the lid and the hinge to `world`. Throws Error naming the field
 // ("jewelry_box.lid_mass") on bad input; the world is unchanged then.
 JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& def = {});
