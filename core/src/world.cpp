@@ -147,6 +147,7 @@ BodyId World::add_body(const BodyDef& in) {
   b.angular = b.motion == BodyMotion::Static ? Vec3::Zero() : def.angular_velocity;
   b.unit_inertia = shape_unit_inertia(def.shape);
   b.backend = w.backend->add(def, b.motion);
+  ++w.body_version;
   return {index, b.generation};
 }
 
@@ -168,6 +169,7 @@ void World::remove_body(BodyId id) {
   }
   w.backend->remove(b.backend);
   release_slot(w.bodies, w.free_body_slots, id.index);
+  ++w.body_version;
 }
 
 bool World::contains(BodyId id) const {

@@ -5,6 +5,7 @@
 
 #include "bullet_backend.h"
 #include "grasp.h"
+#include "bullet_particles.h"
 #include "joint_solvers.h"
 
 #include <map>
@@ -78,6 +79,10 @@ struct HandSlot {
   bool has_pose = false;  // a tracked frame has been seen
   Eigen::Matrix3Xd render;
   bool render_dirty = true;
+  // ParticleContacts::BulletObjects: this hand's particles as Bullet objects, rebuilt when bodies change.
+  std::unique_ptr<BulletParticleCollider> bullet_particles;
+  std::vector<uint32_t> bullet_bodies;  // body slot of each collider body
+  uint64_t bullet_version = 0;
 };
 
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
@@ -100,6 +105,7 @@ struct World::Impl {
   // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
   std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
   std::vector<Event> events;
+  uint64_t body_version = 1;  // bumped on add/remove body, so per-hand caches know to rebuild
   std::vector<StageReport> reports;
   double time = 0;
   double accumulator = 0;
@@ -129,6 +135,7 @@ struct World::Impl {
   void solve_grasped(Joint& j, const Pose& simulated, double dt); // eq. 4 for a grasped child
   void read_soft_joint(Joint& j);
   JointSolveOptions joint_options() const;
+  JointSolver solver_of(const Joint& j) const;
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
 
@@ -140,6 +147,7 @@ struct World::Impl {
   // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.
   std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
   std::string detect_contacts();
+  void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   std::string deform_hands();
   std::string decide_grasps(double dt);
   std::string follow_primary_hands();

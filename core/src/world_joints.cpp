@@ -89,6 +89,14 @@ const Joint& World::Impl::joint(JointId id, const char* argument) const {
   return const_cast<Impl*>(this)->joint(id, argument);
 }
 
+// The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
+JointSolver World::Impl::solver_of(const Joint& j) const {
+#if HANDSIM_WITH_CERES
+  if (def.paper_pipeline) return JointSolver::LmCeres;
+#endif
+  return j.solver;
+}
+
 JointSolveOptions World::Impl::joint_options() const {
   JointSolveOptions o;
   o.max_iterations = def.joint_max_iterations;
@@ -337,8 +345,8 @@ void World::Impl::project_push(Joint& j, const Pose& simulated, double dt) {
     case JointType::Hinge:
     case JointType::Slider: {
       const JointSolveResult r = j.type == JointType::Hinge
-                                     ? solve_hinge(j.solver, j.hinge, j.vertices, p, simulated, j.value, o)
-                                     : solve_slider(j.solver, j.slider, j.vertices, p, simulated, j.value, o);
+                                     ? solve_hinge(solver_of(j), j.hinge, j.vertices, p, simulated, j.value, o)
+                                     : solve_slider(solver_of(j), j.slider, j.vertices, p, simulated, j.value, o);
       j.rate = (r.value - j.value) / dt;
       record(j, r);
       break;

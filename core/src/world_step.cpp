@@ -69,6 +69,10 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
     h.render_dirty = true;
+    if (def.paper_pipeline) {  // the paper skins the whole mesh every frame, needed or not
+      skin_render(*h.model, h.state, h.render);
+      h.render_dirty = false;
+    }
     ++tracked;
   }
   if (tracked == 0) return "skip: no tracked hand";
@@ -79,11 +83,14 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
 std::string World::Impl::detect_contacts() {
   for (auto& entry : pairs) entry.second.contacts.clear();
   std::vector<ParticleContact> found;
+  std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
+  const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
   int tested = 0, touching = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
     if (!h.alive || !h.state.tracked) continue;
     const double radius = h.model->particle_radius;
+    if (bullet) collide_bullet_particles(hi, per_body);
     for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
       Body& b = bodies[bi];
       if (!b.alive) continue;
@@ -92,13 +99,22 @@ std::string World::Impl::detect_contacts() {
       const double margin = held ? def.grasp.release_distance : 0.0;
       Vec3 lo, hi_b;
       shape_world_bounds(b.shape, b.pose, lo, hi_b);
-      if (!bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
+      if (!def.paper_pipeline &&
+          !bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
                           lo, hi_b))
         continue;
       ++tested;
       found.clear();
-      collide_particles(h.state.tracked_positions, radius + margin, b.prepared, b.pose, found);
-      for (ParticleContact& c : found) c.depth -= margin;  // true depth; held contacts may be slightly < 0
+      if (bullet) {
+        // The Bullet spheres carry the release margin for every body; unheld bodies need real contact.
+        for (ParticleContact c : per_body[bi]) {
+          c.depth -= def.grasp.release_distance;
+          if (c.depth > -margin) found.push_back(c);
+        }
+      } else {
+        collide_particles(h.state.tracked_positions, radius + margin, b.prepared, b.pose, found);
+        for (ParticleContact& c : found) c.depth -= margin;  // true depth; held contacts may be slightly < 0
+      }
       auto key = std::make_pair(hi, bi);
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
@@ -109,6 +125,30 @@ std::string World::Impl::detect_contacts() {
   }
   if (tested == 0) return "skip: no hand near a body";
   return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching";
+}
+
+// The paper's narrow phase: the hand's particles as Bullet sphere objects (radius + release margin) in a
+// collision world holding every body; rebuilt whenever bodies were added or removed.
+void World::Impl::collide_bullet_particles(uint32_t hi, std::vector<std::vector<ParticleContact>>& per_body) {
+  HandSlot& h = hands[hi];
+  if (!h.bullet_particles || h.bullet_version != body_version) {
+    h.bullet_particles = std::make_unique<BulletParticleCollider>(
+        h.model->particle_count(), h.model->particle_radius + def.grasp.release_distance);
+    h.bullet_bodies.clear();
+    for (uint32_t bi = 0; bi < bodies.size(); ++bi)
+      if (bodies[bi].alive) {
+        h.bullet_particles->add_body(bodies[bi].shape, bodies[bi].pose);
+        h.bullet_bodies.push_back(bi);
+      }
+    h.bullet_version = body_version;
+  }
+  for (size_t k = 0; k < h.bullet_bodies.size(); ++k)
+    h.bullet_particles->set_body_pose(int(k), bodies[h.bullet_bodies[k]].pose);
+  std::vector<std::vector<ParticleContact>> by_collider;
+  h.bullet_particles->collide(h.state.tracked_positions, by_collider);
+  per_body.assign(bodies.size(), {});
+  for (size_t k = 0; k < h.bullet_bodies.size() && k < by_collider.size(); ++k)
+    per_body[h.bullet_bodies[k]] = std::move(by_collider[k]);
 }
 
 // --- local deformation: penetrating particles move back to the surface (what the user sees) ---

@@ -356,3 +356,29 @@ TEST(JointsWorld, RemovedJointLeavesAFreeBodyWithItsVelocity) {
   p.world.step(kDt);
   EXPECT_NEAR((p.world.body_linear_velocity(p.rod) - v).norm(), 9.81 * kDt, 0.05);
 }
+
+TEST(JointsWorld, PaperPipelineOpensTheLidLikeTheLeanOne) {
+  // Same hand script through both pipelines: the lean one (closed-form contacts, culling, exact solver)
+  // and the paper's (Bullet particle objects, every stage every step, Ceres LM when built).
+  auto run = [](bool paper) {
+    WorldDef wd;
+    wd.paper_pipeline = paper;
+    if (paper) wd.particle_contacts = WorldDef::ParticleContacts::BulletObjects;
+    World world(wd);
+    JewelryBox box = build_jewelry_box(world);
+    world.add_hand(HandDef{});
+    bool grasped = false;
+    for (int i = 0; i < 70; ++i) {
+      const double angle = std::clamp((i - 10) / 60.0, 0.0, 1.0) * 60 * kDeg;
+      world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
+                                       lid_pinch_shape())});
+      grasped = grasped || world.body_grasp(box.lid).grasped;
+      EXPECT_LE(world.joint_state(box.hinge).violation, 1e-9);
+    }
+    EXPECT_TRUE(grasped) << (paper ? "paper" : "lean");
+    return world.joint_state(box.hinge).value;
+  };
+  const double lean = run(false), paper = run(true);
+  EXPECT_NEAR(lean, 60 * kDeg, 2 * kDeg);
+  EXPECT_NEAR(paper, lean, 2 * kDeg);
+}

@@ -33,6 +33,10 @@ struct WorldDef {
   // object per particle as in the paper (a baseline for benchmarks; same contacts, ~100x the cost).
   enum class ParticleContacts : int { ClosedForm = 0, BulletObjects = 1 } particle_contacts =
       ParticleContacts::ClosedForm;
+  // The paper's pipeline, as a baseline for benchmarks: every stage runs every step whether the scene needs
+  // it or not (no bounds culling of hand-body pairs, render mesh skinned every step, hard joints solved with
+  // Ceres LM when built with Ceres). Combine with ParticleContacts::BulletObjects for the full paper mode.
+  bool paper_pipeline = false;
 };
 
 struct BodyDef {
