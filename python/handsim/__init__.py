@@ -11,3 +11,5 @@ from ._core import __version__, Error, JOINT_NAMES  # noqa: F401
 
 #: The 26 OpenXR hand joints as an IntEnum (``HandJoint.INDEX_TIP == handsim.INDEX_TIP == 10``).
 HandJoint = _enum.IntEnum("HandJoint", {name.upper(): i for i, name in enumerate(JOINT_NAMES)})
+
+from . import gltf  # noqa: E402,F401  (pygltflib itself is imported only when a file is loaded)

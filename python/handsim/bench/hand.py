@@ -91,7 +91,7 @@ def bench_gaps(seeds):
 
 
 def run(quick=False):
-    repeats = 30 if quick else 300
+    repeats = 100 if quick else 1000
     return {
         "repeats": repeats,
         **bench_skinning(repeats),
