@@ -91,6 +91,12 @@ py::array_t<T> joint_scalars(const HandFrame& f, Field field) {
   return a;
 }
 
+double scalar_arg(py::handle obj, const char* argument) {
+  Array a = as_array(obj, argument);
+  require_shape(a, {}, argument);
+  return *a.data();
+}
+
 int checked_joint(int joint) {
   if (joint < 0 || joint >= kHandJointCount)
     throw py::index_error("joint: must be in 0..25, got " + std::to_string(joint));
@@ -207,9 +213,9 @@ quaternion (within 1e-3) and a radius >= 0. The hand is tracked when its palm an
             std::copy(a.data(), a.data() + 5, p.curl.begin());
           }
         }
-        if (!thumb_opposition.is_none()) p.thumb_opposition = thumb_opposition.cast<double>();
-        if (!spread.is_none()) p.spread = spread.cast<double>();
-        if (!scale.is_none()) p.scale = scale.cast<double>();
+        if (!thumb_opposition.is_none()) p.thumb_opposition = scalar_arg(thumb_opposition, "thumb_opposition");
+        if (!spread.is_none()) p.spread = scalar_arg(spread, "spread");
+        if (!scale.is_none()) p.scale = scalar_arg(scale, "scale");
         const Pose palm = palm_pose.is_none() ? Pose() : to_pose(palm_pose, "palm_pose");
         return make_hand_frame(cast_arg<Handedness>(handedness, "handedness"), palm, p);
       },

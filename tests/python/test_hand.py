@@ -156,6 +156,10 @@ def test_make_hand_frame_errors_name_the_argument():
         handsim.make_hand_frame(RIGHT, [0, 0, 0])
     with pytest.raises(handsim.InvalidArgumentError, match="^params.scale: "):
         handsim.make_hand_frame(RIGHT, scale=-1)
+    with pytest.raises(TypeError, match="^spread: expected an array of numbers, got str$"):
+        handsim.make_hand_frame(RIGHT, spread="wide")
+    with pytest.raises(ValueError, match=r"^scale: expected shape \(\), got \(2,\)$"):
+        handsim.make_hand_frame(RIGHT, scale=[1, 2])
     with pytest.raises(TypeError, match="^params: expected a HandPoseParams, got dict$"):
         handsim.make_hand_frame(RIGHT, params={})
 

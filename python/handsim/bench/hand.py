@@ -120,7 +120,8 @@ def table(result):
     gaps = format_table(["sampling", "seed", "particles", "largest gap mm", "radius mm"], [
         (g["sampling"], g["seed"], g["particles"], f"{g['largest_gap_m'] * 1e3:.2f}", f"{g['particle_radius_m'] * 1e3:.2f}")
         for g in result["gaps"]])
-    agree = "same particles" if c["same_particles"] else "DIFFERENT particles"
+    agree = (f"same particles, depths within {c['max_depth_difference_m']:.1e} m" if c["same_particles"]
+             else "DIFFERENT particles")
     return (f"virtual hand (medians of {result['repeats']} repeats, one thread)\n{timing}\n"
             f"Bullet objects / closed form: {c['bullet_over_closed_form']:.1f}x ({agree}; "
             f"{c['particles']} particles of a hand pressed {c['press_depth_m'] * 100:.0f} cm into a box)\n\n"
