@@ -620,6 +620,52 @@ def test_gltf_missing_joints_are_synthesized_or_reported(gltf_hands, tmp_path):
         load_gltf_hand(tmp_path / "absent.gltf")
 
 
+def test_gltf_rest_pose_is_the_skinned_bind_mesh(gltf_hands, tmp_path):
+    """Bend the rig's index finger in the file (node rotation, rest pose != bind pose): the loaded mesh must be
+    the original mesh skinned by the core to the loaded joint frames (eq. 1 consistent with glTF skinning)."""
+    from handsim.gltf import load_gltf_hand, _Reader
+    import pygltflib
+    where, hands = gltf_hands
+    mesh0, bind0 = hands["L"]
+    doc = json.loads((where / "Hand_low_L.gltf").read_text())
+    names = [n.get("name") for n in doc["nodes"]]
+    node = names.index("Index_Proximal_L")
+    reader = _Reader(pygltflib.GLTF2().load(str(where / "Hand_low_L.gltf")))
+    parent = reader.global_transform(reader.parent[node])[:3, :3]
+    own = reader.global_transform(node)[:3, :3]
+    palm_x = quat_matrix(bind0.palm_pose[3:])[:, 0]
+    turn = quat_matrix([*(math.sin(0.4) * palm_x), math.cos(0.4)])  # 46 degrees of flexion about the palm's X
+    local = parent.T @ turn @ own
+    w = math.sqrt(max(0.0, 1 + np.trace(local))) / 2
+    doc["nodes"][node]["rotation"] = [(local[2, 1] - local[1, 2]) / (4 * w), (local[0, 2] - local[2, 0]) / (4 * w),
+                                      (local[1, 0] - local[0, 1]) / (4 * w), w]
+    path = tmp_path / "bent.gltf"
+    path.write_text(json.dumps(doc))
+    mesh1, bind1 = load_gltf_hand(path)
+    moved = np.linalg.norm(bind1.positions - bind0.positions, axis=1)
+    assert moved[handsim.INDEX_TIP] > 0.05 and moved[handsim.MIDDLE_TIP] == 0
+    world = handsim.World(handsim.WorldDef(ground=False))
+    hand = world.add_hand(handsim.HandDef(handedness=LEFT), mesh0, bind0)
+    world.step(DT, [bind1])
+    model = world.hand_model(hand)
+    # Not exact: the file's node transforms match its inverse bind matrices only to float32 precision
+    # (measured 4e-9 m here).
+    assert np.abs(world.hand_render_vertices(hand) - mesh1.positions[model.source_vertex]).max() < 1e-7
+
+
+def test_gltf_binary_container_loads_the_same_hand(gltf_hands, tmp_path):
+    import pygltflib
+    from handsim.gltf import load_gltf_hand
+    where, hands = gltf_hands
+    doc = pygltflib.GLTF2().load(str(where / "Hand_low_R.gltf"))
+    doc.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
+    doc.save_binary(str(tmp_path / "hand.glb"))
+    mesh, bind = load_gltf_hand(tmp_path / "hand.glb")
+    np.testing.assert_array_equal(mesh.positions, hands["R"][0].positions)
+    np.testing.assert_array_equal(mesh.triangles, hands["R"][0].triangles)
+    np.testing.assert_array_equal(bind.orientations, hands["R"][1].orientations)
+
+
 def test_openxr_joint_names():
     from handsim.gltf import openxr_joint
     assert openxr_joint("Index_Proximal_L") == (handsim.INDEX_PROXIMAL, LEFT)
