@@ -24,15 +24,21 @@ std::string id_repr(const char* kind, uint32_t index, uint32_t generation) {
          std::to_string(generation) + ")";
 }
 
+template <class IdT>
+void bind_id(py::module_& m, const char* name, const char* doc) {
+  py::class_<IdT>(m, name, doc)
+      .def_readonly("index", &IdT::index)
+      .def_readonly("generation", &IdT::generation)
+      .def_property_readonly("packed", &IdT::packed)
+      .def_static("unpack", &IdT::unpack)
+      .def("__eq__", [](IdT a, py::object b) { return py::isinstance<IdT>(b) && a == b.cast<IdT>(); })
+      .def("__hash__", [](IdT a) { return std::hash<uint64_t>()(a.packed()); })
+      .def("__repr__", [name](IdT a) { return id_repr(name, a.index, a.generation); });
+}
+
 void bind_ids(py::module_& m) {
-  py::class_<BodyId>(m, "BodyId", "Opaque handle of a body (slot index + generation).")
-      .def_readonly("index", &BodyId::index)
-      .def_readonly("generation", &BodyId::generation)
-      .def_property_readonly("packed", &BodyId::packed)
-      .def_static("unpack", &BodyId::unpack)
-      .def("__eq__", [](BodyId a, py::object b) { return py::isinstance<BodyId>(b) && a == b.cast<BodyId>(); })
-      .def("__hash__", [](BodyId a) { return std::hash<uint64_t>()(a.packed()); })
-      .def("__repr__", [](BodyId a) { return id_repr("BodyId", a.index, a.generation); });
+  bind_id<BodyId>(m, "BodyId", "Opaque handle of a body (slot index + generation).");
+  bind_id<HandId>(m, "HandId", "Opaque handle of a hand (slot index + generation).");
 }
 
 void bind_shapes(py::module_& m) {
@@ -77,13 +83,29 @@ void bind_shapes(py::module_& m) {
 }
 
 void bind_defs(py::module_& m) {
+  m.attr("OPPOSING_COS") = kOpposingCos;
+  m.attr("PAPER_LITERAL_COS") = kPaperLiteralCos;
+  py::class_<GraspSettings>(m, "GraspSettings", "Grasp decision (eq. 3), hysteresis, release and tracking grace.")
+      .def(py::init([](py::kwargs kw) { return from_kwargs<GraspSettings>(kw, "GraspSettings"); }))
+      .def_readwrite("cos_threshold", &GraspSettings::cos_threshold)
+      .def_readwrite("frames_to_grasp", &GraspSettings::frames_to_grasp)
+      .def_readwrite("frames_to_release", &GraspSettings::frames_to_release)
+      .def_readwrite("release_distance", &GraspSettings::release_distance)
+      .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
+      .def_readwrite("velocity_window", &GraspSettings::velocity_window);
+  py::enum_<WorldDef::ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.")
+      .value("CLOSED_FORM", WorldDef::ParticleContacts::ClosedForm)
+      .value("BULLET_OBJECTS", WorldDef::ParticleContacts::BulletObjects);
+
   py::class_<WorldDef> wd(m, "WorldDef", "World settings (gravity, fixed substep, ground).");
   wd.def(py::init([](py::kwargs kw) { return from_kwargs<WorldDef>(kw, "WorldDef"); }))
       .def_readwrite("fixed_substep", &WorldDef::fixed_substep)
       .def_readwrite("max_substeps", &WorldDef::max_substeps)
       .def_readwrite("ground", &WorldDef::ground)
       .def_readwrite("ground_height", &WorldDef::ground_height)
-      .def_readwrite("ground_friction", &WorldDef::ground_friction);
+      .def_readwrite("ground_friction", &WorldDef::ground_friction)
+      .def_readwrite("grasp", &WorldDef::grasp)
+      .def_readwrite("particle_contacts", &WorldDef::particle_contacts);
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
 
   py::class_<BodyDef> bd(m, "BodyDef", "What to create: shape, mass (0 = static), pose, material.");
@@ -105,11 +127,19 @@ void bind_defs(py::module_& m) {
       .value("KINEMATIC", BodyMotion::Kinematic);
 }
 
-BodyId to_body_id(py::handle h, const char* argument) {
-  if (!py::isinstance<BodyId>(h))
-    throw py::type_error(std::string(argument) + ": expected a BodyId, got " +
-                         std::string(py::str(py::type::of(h).attr("__name__"))));
-  return h.cast<BodyId>();
+BodyId to_body_id(py::handle h, const char* argument) { return cast_arg<BodyId>(h, argument); }
+
+// hands=None or a sequence of HandFrame, checked item by item ("hands[1]: expected a HandFrame, got int").
+std::vector<HandFrame> to_frames(py::handle hands) {
+  std::vector<HandFrame> frames;
+  if (hands.is_none()) return frames;
+  if (!py::isinstance<py::sequence>(hands) || py::isinstance<py::str>(hands))
+    throw py::type_error("hands: expected a list of HandFrame, got " +
+                         std::string(py::str(py::type::of(hands).attr("__name__"))));
+  py::sequence seq = py::reinterpret_borrow<py::sequence>(hands);
+  for (size_t i = 0; i < seq.size(); ++i)
+    frames.push_back(cast_arg<HandFrame>(seq[i], "hands[" + std::to_string(i) + "]"));
+  return frames;
 }
 
 void bind_world_class(py::module_& m) {
@@ -121,8 +151,9 @@ void bind_world_class(py::module_& m) {
       .def("remove_body", [](World& w, py::handle id) { w.remove_body(to_body_id(id, "body")); },
            py::arg("body"))
       .def("contains", [](const World& w, py::handle id) {
-        return py::isinstance<BodyId>(id) && w.contains(id.cast<BodyId>());
-      }, py::arg("body"))
+        return (py::isinstance<BodyId>(id) && w.contains(id.cast<BodyId>())) ||
+               (py::isinstance<HandId>(id) && w.contains(id.cast<HandId>()));
+      }, py::arg("id"), "Whether a BodyId or HandId names a live object of this world.")
       .def("bodies", &World::bodies)
       .def("body_shape", [](const World& w, py::handle id) { return w.body_shape(to_body_id(id, "body")); },
            py::arg("body"))
@@ -151,11 +182,14 @@ void bind_world_class(py::module_& m) {
            },
            py::arg("body"), py::arg("linear"), py::arg("angular"))
       .def("step",
-           [](World& w, double dt) {
+           [](World& w, double dt, py::handle hands) {
+             std::vector<HandFrame> frames = to_frames(hands);
              py::gil_scoped_release release;
-             w.step(dt);
+             w.step(dt, frames);
            },
-           py::arg("dt"), "Advance one frame of dt seconds.")
+           py::arg("dt"), py::arg("hands") = py::none(),
+           "Advance one frame of dt seconds. hands[i] (a HandFrame) drives the i-th hand of hands(); hands\n"
+           "without a frame are untracked this frame. Everything is validated before anything changes.")
       .def_property_readonly("time", &World::time)
       .def("state_hash", &World::state_hash, "Stable 64-bit hash of the whole state.");
 }

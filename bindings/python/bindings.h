@@ -5,5 +5,7 @@
 
 namespace handsim {
 void bind_errors(pybind11::module_& m);
+void bind_hand(pybind11::module_& m);
 void bind_world(pybind11::module_& m);
+void bind_world_hands(pybind11::module_& m);  // after bind_world: adds the hand methods to World
 }  // namespace handsim

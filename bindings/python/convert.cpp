@@ -13,13 +13,26 @@ Array as_array(py::handle obj, const std::string& argument) {
   return a;
 }
 
-std::string shape_str(const Array& a) {
+IntArray as_int_array(py::handle obj, const std::string& argument) {
+  auto type_name = [&] { return std::string(py::str(py::type::of(obj).attr("__name__"))); };
+  if (obj.is_none() || py::isinstance<py::str>(obj))
+    throw py::type_error(argument + ": expected an array of integers, got " + type_name());
+  py::array a = py::array::ensure(obj);
+  if (!a) throw py::type_error(argument + ": expected an array of integers, got " + type_name());
+  const char kind = a.dtype().kind();
+  if (kind != 'i' && kind != 'u' && a.size() > 0)
+    throw py::type_error(argument + ": expected an array of integers, got dtype " +
+                         std::string(py::str(a.dtype())));
+  return IntArray::ensure(a);
+}
+
+std::string shape_str(const py::array& a) {
   std::string s = "(";
   for (py::ssize_t i = 0; i < a.ndim(); ++i) s += std::to_string(a.shape(i)) + (a.ndim() == 1 ? "," : i + 1 < a.ndim() ? ", " : "");
   return s + ")";
 }
 
-void require_shape(const Array& a, std::vector<py::ssize_t> shape, const std::string& argument) {
+void require_shape(const py::array& a, std::vector<py::ssize_t> shape, const std::string& argument) {
   bool ok = a.ndim() == py::ssize_t(shape.size());
   for (size_t i = 0; ok && i < shape.size(); ++i) ok = shape[i] < 0 || a.shape(i) == shape[i];
   if (ok) return;

@@ -7,6 +7,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -14,12 +15,16 @@ namespace handsim::py_convert {
 
 namespace py = pybind11;
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using IntArray = py::array_t<int64_t, py::array::c_style | py::array::forcecast>;
 
 // Converts to a float64 array, or raises TypeError naming the argument.
 Array as_array(py::handle obj, const std::string& argument);
+// Converts an integer array (any integer dtype; an empty sequence too) to int64, or raises TypeError naming
+// the argument: floats are not silently truncated into indices.
+IntArray as_int_array(py::handle obj, const std::string& argument);
 // Raises ValueError unless the array has exactly this shape (-1 matches any length).
-void require_shape(const Array& a, std::vector<py::ssize_t> shape, const std::string& argument);
-std::string shape_str(const Array& a);
+void require_shape(const py::array& a, std::vector<py::ssize_t> shape, const std::string& argument);
+std::string shape_str(const py::array& a);
 
 Vec3 to_vec3(py::handle obj, const std::string& argument);
 Quat to_quat(py::handle obj, const std::string& argument);  // x,y,z,w; normalisation is the core's job
@@ -29,6 +34,31 @@ std::vector<Vec3> to_points(py::handle obj, const std::string& argument);  // (N
 py::array_t<double> from_vec3(const Vec3& v);
 py::array_t<double> from_quat(const Quat& q);
 py::array_t<double> from_pose(const Pose& p);
+
+// A column-major Rows x N Eigen matrix has the memory layout of a row-major (N, Rows) array: one copy each way.
+template <class Scalar, int Rows>
+py::array_t<Scalar> from_columns(const Eigen::Matrix<Scalar, Rows, Eigen::Dynamic>& m) {
+  py::array_t<Scalar> a({py::ssize_t(m.cols()), py::ssize_t(m.rows())});
+  std::copy(m.data(), m.data() + m.size(), a.mutable_data());
+  return a;
+}
+// (N, Rows) array (already shape-checked) -> Rows x N matrix.
+template <class Scalar, int Rows, class In>
+Eigen::Matrix<Scalar, Rows, Eigen::Dynamic> to_columns(const py::array_t<In, py::array::c_style | py::array::forcecast>& a) {
+  Eigen::Matrix<Scalar, Rows, Eigen::Dynamic> m(Rows, a.shape(0));
+  std::transform(a.data(), a.data() + a.size(), m.data(), [](In v) { return Scalar(v); });
+  return m;
+}
+
+// A bound C++ object (id, enum, def struct) or TypeError naming the argument: "body: expected a BodyId, got int".
+template <class T>
+T cast_arg(py::handle obj, const std::string& argument) {
+  if (!py::isinstance<T>(obj))
+    throw py::type_error(argument + ": expected a " +
+                         std::string(py::str(py::detail::get_type_handle(typeid(T), true).attr("__name__"))) +
+                         ", got " + std::string(py::str(py::type::of(obj).attr("__name__"))));
+  return obj.cast<T>();
+}
 
 // Builds a default T and assigns each keyword as an attribute, so `BodyDef(mass=2)` works for every def
 // struct and an unknown keyword is a TypeError naming it.

@@ -14,5 +14,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("WITH_CERES") = false;
 #endif
   handsim::bind_errors(m);
+  handsim::bind_hand(m);
   handsim::bind_world(m);
+  handsim::bind_world_hands(m);
 }

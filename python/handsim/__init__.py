@@ -1,8 +1,15 @@
 """handsim: direct hand manipulation of constrained virtual objects.
 
-The C++ core lives in ``handsim._core``; this package re-exports it and adds pure-Python helpers.
-Conventions: right-handed, Y-up, metres, seconds; quaternions x, y, z, w; poses as (7,) arrays
-``[x, y, z, qx, qy, qz, qw]``.
+The C++ core lives in ``handsim._core``; this package re-exports it and adds pure-Python helpers
+(``handsim.gltf`` loads rigged glTF hands). Conventions: right-handed, Y-up, metres, seconds; quaternions
+x, y, z, w; poses as (7,) arrays ``[x, y, z, qx, qy, qz, qw]``; hand joints in OpenXR order.
 """
+import enum as _enum
+
 from ._core import *  # noqa: F401,F403
-from ._core import __version__, Error  # noqa: F401
+from ._core import __version__, Error, JOINT_NAMES  # noqa: F401
+
+#: The 26 OpenXR hand joints as an IntEnum (``HandJoint.INDEX_TIP == handsim.INDEX_TIP == 10``).
+HandJoint = _enum.IntEnum("HandJoint", {name.upper(): i for i, name in enumerate(JOINT_NAMES)})
+
+from . import gltf  # noqa: E402,F401  (pygltflib itself is imported only when a file is loaded)

@@ -9,6 +9,7 @@ import json
 import sys
 
 BENCHMARKS = {
+    "hand": "handsim.bench.hand",
     "world": "handsim.bench.world",
 }
 
