@@ -6,4 +6,5 @@
 namespace handsim {
 void bind_errors(pybind11::module_& m);
 void bind_world(pybind11::module_& m);
+void bind_joints(pybind11::module_& m);  // last: adds the joint methods to World and WorldDef
 }  // namespace handsim

@@ -15,4 +15,5 @@ PYBIND11_MODULE(_core, m) {
 #endif
   handsim::bind_errors(m);
   handsim::bind_world(m);
+  handsim::bind_joints(m);
 }
