@@ -17,4 +17,5 @@ PYBIND11_MODULE(_core, m) {
   handsim::bind_hand(m);
   handsim::bind_world(m);
   handsim::bind_world_hands(m);
+  handsim::bind_joints(m);
 }
