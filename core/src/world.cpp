@@ -147,14 +147,14 @@ BodyId World::add_body(const BodyDef& in) {
 void World::remove_body(BodyId id) {
   Impl& w = *impl_;
   Body& b = w.body(id);
-  // Let go of it first, so the hands' grasp state and the events stay consistent.
+  // Let go of it first, so the hands' grasp state and the events stay consistent: every hand holding it
+  // gets a GraspEnd, every hand touching it a ContactEnd, and no pair keeps the slot index it leaves behind.
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
     if (it->first.second != id.index) {
       ++it;
       continue;
     }
-    if (it->second.tracker.grasped())
-      w.events.push_back({EventType::GraspEnd, w.hand_id(it->first.first), id, EventReason::BodyRemoved});
+    w.end_pair(it->first.first, id.index, EventReason::BodyRemoved);
     it = w.pairs.erase(it);
   }
   w.backend->remove(b.backend);
@@ -237,8 +237,8 @@ void World::remove_hand(HandId id) {
       ++it;
       continue;
     }
-    if (it->second.tracker.grasped())
-      w.end_grasp(id.index, it->first.second, EventReason::TrackingLost, true);
+    // A body it held alone falls at rest; one it shared stays with the other hand.
+    w.end_pair(id.index, it->first.second, EventReason::HandRemoved);
     it = w.pairs.erase(it);
   }
   release_slot(w.hands, w.free_hand_slots, id.index);
@@ -276,6 +276,8 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
   Body& b = impl_->body(id);
   Pose p = validate::pose(pose, "pose");
   b.pose = b.synced_pose = p;
+  // Without this the attach stage would put a held body straight back into the hand.
+  impl_->retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
 }
 

@@ -29,6 +29,12 @@ struct Body {
   Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
+  // Whether the hand in slot `hand` holds this body, as primary or secondary. (A null secondary id has
+  // index 0 too, so comparing indices alone would make hand slot 0 hold every singly held body.)
+  bool held_by(uint32_t hand) const {
+    return grasp.grasped &&
+           (grasp.primary.index == hand || (!grasp.secondary.is_null() && grasp.secondary.index == hand));
+  }
 };
 
 struct HandSlot {
@@ -61,6 +67,9 @@ struct World::Impl {
   // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
   std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
   std::vector<Event> events;
+  // How many of `events` (at the front) the last step raised. The next step drops those and keeps the ones
+  // that removals raised after it, so a caller who reads events() after each step sees those too.
+  size_t step_events = 0;
   std::vector<StageReport> reports;
   double time = 0;
   double accumulator = 0;
@@ -80,6 +89,12 @@ struct World::Impl {
   // Grasp bookkeeping (world_step.cpp).
   void begin_grasp(uint32_t hand, uint32_t body);
   void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
+  void hand_over(Body& b);
+  void release(Body& b, const BodyVelocity& velocity);
+  void retake_relative_poses(Body& b);
+  // Ends what a (hand, body) pair has going on before one of them is removed: GraspEnd with `reason` when
+  // the hand holds the body, ContactEnd when it touched it. The caller erases the pair.
+  void end_pair(uint32_t hand, uint32_t body, EventReason reason);
   void set_motion(Body& b, BodyMotion motion);
 
   // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.

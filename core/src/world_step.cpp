@@ -12,7 +12,7 @@ namespace handsim {
 void World::step(double dt, const std::vector<HandFrame>& frames) {
   Impl& w = *impl_;
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
-  w.events.clear();
+  w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(w.step_events));
   w.reports.clear();
   auto stage = [&w](const char* name, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -31,6 +31,7 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
   stage("joints", [&] { return w.solve_joints(); });             // line 19: eq. 4
   stage("slip", [&] { return w.retake_secondary_hands(); });     // line 20: eq. 5
   w.time += dt;
+  w.step_events = w.events.size();
 }
 
 void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames) const {
@@ -88,8 +89,7 @@ std::string World::Impl::detect_contacts() {
       Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
-      const bool held = b.grasp.grasped && (b.grasp.primary.index == hi || b.grasp.secondary.index == hi);
-      const double margin = held ? def.grasp.release_distance : 0.0;
+      const double margin = b.held_by(hi) ? def.grasp.release_distance : 0.0;
       Vec3 lo, hi_b;
       shape_world_bounds(b.shape, b.pose, lo, hi_b);
       if (!bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
@@ -147,10 +147,11 @@ std::string World::Impl::decide_grasps(double dt) {
       for (const ParticleContact& c : pair.contacts) directions.push_back(c.normal);
       const bool opposing = count >= 2 && opposing_contacts(directions, def.grasp.cos_threshold);
       const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
-      if (e.type == GraspEventType::GraspBegin) begin_grasp(hi, bi);
       if (e.type == GraspEventType::GraspEnd)
         end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);
+      // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
+      if (pair.tracker.grasped() && !b.held_by(hi)) begin_grasp(hi, bi);
       ++decided;
     }
     // Forget pairs with nothing going on, so the map holds only what touches or holds.
@@ -178,27 +179,48 @@ void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
 
 void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
   Body& b = bodies[bi];
-  const HandSlot& h = hands[hi];
-  const bool primary = b.grasp.grasped && b.grasp.primary.index == hi;
-  const bool secondary = !b.grasp.secondary.is_null() && b.grasp.secondary.index == hi;
-  if (!primary && !secondary) return;
-  if (secondary) {
-    b.grasp.secondary = HandId{};
-  } else if (!b.grasp.secondary.is_null()) {
-    // The other hand takes over from where the body is now: no jump.
-    const HandSlot& other = hands[b.grasp.secondary.index];
-    b.grasp.primary = b.grasp.secondary;
-    b.grasp.primary_relative = other.palm.inverse() * b.pose;
+  if (!b.held_by(hi)) return;
+  if (b.grasp.primary.index != hi) {
     b.grasp.secondary = HandId{};
   } else {
-    b.grasp = GraspInfo();
-    set_motion(b, BodyMotion::Dynamic);
-    const BodyVelocity v = zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position);
-    b.linear = v.linear;
-    b.angular = v.angular;
-    backend->write(b.backend, b.pose, b.linear, b.angular);
+    // The attach stage has not run yet this frame: first put the body where its hand holds it now, so a
+    // released body starts from the hand's current pose (with the velocity of that point), and a body handed
+    // over starts from there too.
+    const HandSlot& h = hands[hi];
+    b.pose = h.palm * b.grasp.primary_relative;
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else release(b, zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position));
   }
   events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
+}
+
+// The secondary hand becomes primary, taking the body from where it is: no jump.
+void World::Impl::hand_over(Body& b) {
+  b.grasp.primary = b.grasp.secondary;
+  b.grasp.secondary = HandId{};
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::release(Body& b, const BodyVelocity& velocity) {
+  b.grasp = GraspInfo();
+  b.linear = velocity.linear;
+  b.angular = velocity.angular;
+  set_motion(b, BodyMotion::Dynamic);
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
+// A held body moved by the caller stays held where it now is.
+void World::Impl::retake_relative_poses(Body& b) {
+  if (!b.grasp.grasped) return;
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+  if (!b.grasp.secondary.is_null()) b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
+  auto it = pairs.find({hi, bi});
+  if (bodies[bi].held_by(hi)) end_grasp(hi, bi, reason, true);
+  if (it != pairs.end() && it->second.previous_count > 0)
+    events.push_back({EventType::ContactEnd, hand_id(hi), body_id(bi)});
 }
 
 void World::Impl::set_motion(Body& b, BodyMotion motion) {
