@@ -27,6 +27,9 @@ struct Body {
   int backend = -1;
   GraspInfo grasp;
   Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
+  // Released by its hand in this step: it leaves with the hand's velocity, which the object-centred update
+  // must not replace in the same step (the fingers that just let go still press it by the grip's depth).
+  bool just_released = false;
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
   // Whether the hand in slot `hand` holds this body, as primary or secondary. (A null secondary id has

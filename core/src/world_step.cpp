@@ -203,6 +203,7 @@ void World::Impl::hand_over(Body& b) {
 
 void World::Impl::release(Body& b, const BodyVelocity& velocity) {
   b.grasp = GraspInfo();
+  b.just_released = true;
   b.linear = velocity.linear;
   b.angular = velocity.angular;
   set_motion(b, BodyMotion::Dynamic);
@@ -248,30 +249,40 @@ std::string World::Impl::follow_primary_hands() {
 }
 
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
-// The fitted motion is applied as the body's velocity over this frame rather than as a teleport: in free
-// space both give the same pose, but with a velocity Bullet still resolves the table and other bodies, so
-// a hand pressing a box down cannot push it through the table.
+// The fitted motion is applied as a velocity over this frame rather than as a teleport: in free space both
+// give the same pose, but with a velocity Bullet still resolves the table and other bodies, so a hand
+// pressing a box down cannot push it through the table. The velocity is the touching hands' own velocity at
+// the body plus the fitted correction: the fit only sees what still penetrates after the body's last frame of
+// motion, so the correction alone would stop a body that moves along with the hand (a box thrown while the
+// index still touches it, a box pushed by a moving palm) every frame. With the hand's velocity as the base, a
+// body carried by a moving hand keeps its speed, and one under a still hand gets exactly the correction.
 std::string World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3> from, to;
   int fitted = 0;
   for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
     Body& b = bodies[bi];
-    if (!b.manipulable() || b.grasp.grasped) continue;
+    const bool just_released = b.just_released;
+    b.just_released = false;
+    if (!b.manipulable() || b.grasp.grasped || just_released) continue;
     from.clear();
     to.clear();
+    BodyVelocity carried;
     for (auto& entry : pairs) {
       if (entry.first.second != bi) continue;
+      const size_t before = from.size();
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
         from.push_back(c.point);
         to.push_back(c.point - c.normal * c.depth);  // where the surface must go to stop the penetration
       }
+      const BodyVelocity v = hands[entry.first.first].history.attached_body_velocity(b.pose.position);
+      carried.linear += double(from.size() - before) * v.linear;
+      carried.angular += double(from.size() - before) * v.angular;
     }
     if (from.empty()) continue;
-    const RigidMotion motion = fit_rigid_motion(from, to);
-    const BodyVelocity v = velocity_from_motion(motion, b.pose.position, dt);
-    b.linear = v.linear;
-    b.angular = v.angular;
+    const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
+    b.linear = carried.linear / double(from.size()) + correction.linear;
+    b.angular = carried.angular / double(from.size()) + correction.angular;
     backend->write(b.backend, b.pose, b.linear, b.angular);
     ++fitted;
   }

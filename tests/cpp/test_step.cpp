@@ -27,8 +27,11 @@ struct Pinch {
   Pose palm_in_box;  // palm pose in the box frame: the index pad rests on the box's +x face, the thumb faces -x
   double touch = 0;  // closure at which the thumb reaches the -x face (first opposing contacts)
 
-  HandFrame frame(const Pose& box, double closure, const Pose& box_to_palm_extra = Pose{}) const {
-    const Pose palm = box * box_to_palm_extra * palm_in_box;
+  // The hand holding a box at `box`; `turn` rotates the hand about the box centre (box frame) first.
+  HandFrame frame(const Pose& box, double closure, const Pose& turn = Pose{}) const {
+    return at_palm(box * turn * palm_in_box, closure);
+  }
+  HandFrame at_palm(const Pose& palm, double closure) const {
     HandFrame f = base;
     for (int j = kThumbMetacarpal; j <= kThumbTip; ++j) f.joints[j].position += closure * axis;
     for (JointPose& j : f.joints) {
@@ -137,11 +140,24 @@ struct Scene {
     world.step(kDt, frames);
     log.insert(log.end(), world.events().begin(), world.events().end());
   }
-  // Comes down from 10 cm above with the thumb open, then closes the thumb to hold() over 15 frames.
-  void grasp() {
+  // Comes down from 10 cm above with the thumb open.
+  void approach() {
     for (int i = 0; i <= 20; ++i)
       step({pinch.frame(translation(Vec3(0, 0.1 * (1 - i / 20.0), 0)) * rest, open())});
+  }
+  // Approaches, then closes the thumb to hold() over 15 frames.
+  void grasp() {
+    approach();
     for (int i = 1; i <= 15; ++i) step({pinch.frame(rest, open() + (hold() - open()) * i / 15.0)});
+  }
+  // Lifts the held cube straight up by `height` over `frames` frames; returns the last cube target.
+  Pose lift(double height, int frames) {
+    Pose target = rest;
+    for (int i = 1; i <= frames; ++i) {
+      target = translation(Vec3(0, height * smoothstep(double(i) / frames), 0)) * rest;
+      step({pinch.frame(target, hold())});
+    }
+    return target;
   }
   // Opens the thumb at 2 mm per frame around the box pose `at`, then keeps it open; returns the frame of
   // the GraspEnd (-1: none).
@@ -216,4 +232,100 @@ TEST(Step, PinchLiftTurnAndRelease) {
   for (int i = 0; i < 90; ++i) s.step({s.pinch.frame(target, s.open())});
   EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
   EXPECT_EQ(count(s.log, EventType::GraspBegin), 1);
+}
+
+// Thrown: the hand moves at a constant linear velocity v (of the palm) and angular velocity w while the thumb
+// opens. The released cube leaves with the velocity of its point on the hand, v + w x (x - palm), and with w,
+// to 5 %. In the release frame gravity has acted for one dt on the now free cube; that is taken out.
+void expect_thrown_with_hand_velocity(const Vec3& v, const Vec3& w) {
+  Scene s;
+  s.grasp();
+  const Pose lifted = s.lift(0.25, 30);
+  const Pose palm0 = lifted * s.pinch.palm_in_box;
+  const Pose rel = s.world.body_grasp(s.box).primary_relative;
+  int released = -1;
+  Pose palm;
+  for (int i = 1; i <= 30 && released < 0; ++i) {
+    const double t = i * kDt;
+    palm = Pose{palm0.position + v * t, (Quat(Eigen::AngleAxisd(w.norm() * t, w.normalized())) * palm0.orientation)};
+    if (w.isZero()) palm.orientation = palm0.orientation;
+    const double closure = i <= 6 ? s.hold() : std::max(s.open(), s.hold() - 0.002 * (i - 6));
+    s.step({s.pinch.at_palm(palm, closure)});
+    if (count(s.world.events(), EventType::GraspEnd) == 1) released = i;
+  }
+  ASSERT_GT(released, 0) << "never released";
+  const Vec3 x = (palm * rel).position;
+  const Vec3 expected = v + w.cross(x - palm.position);
+  const Vec3 linear = s.world.body_linear_velocity(s.box) - s.world.def().gravity * kDt;
+  EXPECT_LE((linear - expected).norm(), 0.05 * expected.norm()) << linear.transpose() << " vs " << expected.transpose();
+  EXPECT_LE((s.world.body_angular_velocity(s.box) - w).norm(), 0.05 * std::max(w.norm(), 1e-9))
+      << s.world.body_angular_velocity(s.box).transpose();
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
+
+TEST(Step, ThrownLinearlyLeavesWithTheHandVelocity) {
+  expect_thrown_with_hand_velocity(Vec3(1.5, 0.8, -0.5), Vec3::Zero());
+}
+
+TEST(Step, ThrownWithSpinLeavesWithThePointVelocityAndSpin) {
+  expect_thrown_with_hand_velocity(Vec3(1.2, 0.5, 0.0), Vec3(0.5, 3.0, -1.0));
+}
+
+// A flat hand, palm facing +x, sweeps through the cube's place at 0.25 m/s for 1.2 s: the cube slides ahead
+// of it along the ground, is never grasped, and never gets into the hand: the tracked particle spheres overlap
+// it by less than their radius (the skin itself never enters), and the particles drawn (deformed) are never
+// inside it.
+TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
+  World world;
+  HandId hand = world.add_hand(HandDef{});
+  BodyId box = world.add_body(cube(Vec3(0, kHalf, 0)));
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  const double speed = 0.25, r = world.hand_model(hand).particle_radius;
+  double deepest = 0, deepest_drawn = 0;
+  int grasps = 0, touching = 0;
+  for (int i = 0; i < 72; ++i) {
+    const Pose palm{Vec3(-0.09 + speed * i * kDt, kHalf, 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
+    const Pose before = world.body_pose(box);  // what this frame's contact pass sees
+    world.step(kDt, {make_hand_frame(Handedness::Right, palm)});
+    grasps += count(world.events(), EventType::GraspBegin);
+    touching += world.body_contact_count(box, hand) > 0;
+    const Eigen::Matrix3Xd& tracked = world.hand_particles(hand, false);
+    const Eigen::Matrix3Xd& drawn = world.hand_particles(hand, true);
+    for (Eigen::Index p = 0; p < tracked.cols(); ++p) {
+      deepest = std::max(deepest, r - cube_distance(before, tracked.col(p)));
+      deepest_drawn = std::max(deepest_drawn, -cube_distance(before, drawn.col(p)));
+    }
+  }
+  std::printf("push: deepest tracked penetration %.2f mm (r = %.2f mm), drawn %.3g m, touching frames %d, x %.3f\n",
+              deepest * 1e3, r * 1e3, deepest_drawn, touching, world.body_pose(box).position.x());
+  EXPECT_EQ(grasps, 0);
+  EXPECT_GT(touching, 40);
+  const Pose end = world.body_pose(box);
+  EXPECT_GT(end.position.x(), 0.15);  // it went along
+  EXPECT_NEAR(end.position.y(), kHalf, 2e-3);
+  EXPECT_LT(std::abs(end.position.z()), 0.01);
+  EXPECT_LT(std::acos(std::min(1.0, (end.orientation * Vec3::UnitY()).y())), 0.05);  // still upright
+  EXPECT_LT(deepest, r);  // the skin (particle centres) never enters the cube
+  EXPECT_LE(deepest_drawn, 1e-9);
+}
+
+// Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
+// one grasp begins and ends. Without hysteresis (1 frame each way, no release margin) the same input flickers,
+// which shows that the count would catch it.
+int dithering_grasp_events(const GraspSettings& grasp) {
+  WorldDef def;
+  def.grasp = grasp;
+  Scene s(def);
+  s.approach();
+  for (int i = 0; i < 120; ++i) s.step({s.pinch.frame(s.rest, s.pinch.touch + (i % 2 ? 0.001 : -0.001))});
+  return count(s.log, EventType::GraspBegin) + count(s.log, EventType::GraspEnd);
+}
+
+TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
+  EXPECT_LE(dithering_grasp_events(GraspSettings{}), 2);
+  GraspSettings none;
+  none.frames_to_grasp = 1;
+  none.frames_to_release = 1;
+  none.release_distance = 0;
+  EXPECT_GE(dithering_grasp_events(none), 40);
 }
