@@ -329,3 +329,271 @@ TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
   none.release_distance = 0;
   EXPECT_GE(dithering_grasp_events(none), 40);
 }
+
+// Two hands: the left hand pinches the cube the right hand holds (from below, across the other pair of
+// faces) and becomes secondary. It turns about its pinch axis: it slips (the cube stays with the primary).
+// The right hand opens: the left takes over without a jump, and the cube then follows the left hand.
+TEST(Step, SecondHandSlipsThenTakesOverWithoutAJump) {
+  Scene s;
+  const HandId left = s.world.add_hand(HandDef{Handedness::Left});
+  const Pinch lp = make_pinch(s.world.hand_model(left));
+  s.grasp();
+  const Pose lifted = s.lift(0.2, 30);
+  const HandFrame right_hold = s.pinch.frame(lifted, s.hold());
+  const Pose box = s.world.body_pose(s.box);
+  const Pose below = rotation(M_PI / 2, Vec3::UnitY()) * rotation(M_PI, Vec3::UnitZ());
+  auto left_at = [&](double closure, const Pose& turn) { return lp.frame(box, closure, turn * below); };
+  for (int i = 0; i <= 20; ++i)
+    s.step({right_hold, left_at(lp.touch - 0.02, translation(Vec3(0, -0.1 * (1 - i / 20.0), 0)))});
+  for (int i = 1; i <= 15; ++i) s.step({right_hold, left_at(lp.touch - 0.02 + 0.023 * i / 15.0, Pose{})});
+  GraspInfo g = s.world.body_grasp(s.box);
+  ASSERT_EQ(g.primary, s.hand);
+  ASSERT_EQ(g.secondary, left);
+  EXPECT_EQ(count(s.log, EventType::GraspBegin), 2);
+  const Pose rel = g.primary_relative;
+  // Slip: the left hand turns 20 degrees about its pinch axis (the cube's z axis); the cube does not move.
+  Pose turn;
+  for (int i = 1; i <= 20; ++i) {
+    turn = rotation(0.35 * i / 20.0, Vec3::UnitZ());
+    s.step({right_hold, left_at(lp.touch + 0.003, turn)});
+    expect_pose_near(s.world.body_pose(s.box), s.world.hand_palm_pose(s.hand) * rel, 1e-9, "slip " + std::to_string(i));
+    ASSERT_EQ(s.world.body_grasp(s.box).secondary, left) << "slip frame " << i;
+  }
+  expect_pose_near(s.world.body_pose(s.box), box, 1e-9, "after the slip");
+  // The right hand opens its thumb; the left hand stays where it is.
+  const HandFrame left_hold = left_at(lp.touch + 0.003, turn);
+  int handover = -1;
+  for (int i = 1; i <= 15 && handover < 0; ++i) {
+    s.step({s.pinch.frame(lifted, s.hold() - 0.002 * i), left_hold});
+    expect_pose_near(s.world.body_pose(s.box), box, 1e-9, "release frame " + std::to_string(i));
+    if (count(s.world.events(), EventType::GraspEnd) > 0) handover = i;
+  }
+  ASSERT_GT(handover, 0);
+  const Event& end = s.log.back();
+  EXPECT_EQ(end.type, EventType::GraspEnd);
+  EXPECT_EQ(end.hand, s.hand);
+  EXPECT_EQ(end.reason, EventReason::Released);
+  g = s.world.body_grasp(s.box);
+  ASSERT_TRUE(g.grasped);
+  EXPECT_EQ(g.primary, left);
+  EXPECT_TRUE(g.secondary.is_null());
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Kinematic);
+  const Pose left_rel = g.primary_relative;
+  expect_pose_near(s.world.hand_palm_pose(left) * left_rel, box, 1e-12, "handover");
+  // Now the cube follows the left hand: up 10 cm and a quarter turn about x.
+  const HandFrame right_open = s.pinch.frame(lifted, s.open());
+  for (int i = 1; i <= 30; ++i) {
+    const double t = smoothstep(i / 30.0);
+    const Pose moved = translation(Vec3(0, 0.1 * t, 0)) * box * rotation(M_PI / 2 * t, Vec3::UnitX());
+    s.step({right_open, lp.frame(moved, lp.touch + 0.003, rotation(M_PI / 2 * t, Vec3::UnitX()).inverse() * turn * below)});
+    expect_pose_near(s.world.body_pose(s.box), s.world.hand_palm_pose(left) * left_rel, 1e-9, "follow " + std::to_string(i));
+    ASSERT_TRUE(s.world.body_grasp(s.box).grasped) << "follow frame " << i;
+  }
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y() - box.position.y(), 0.1, 0.005);
+}
+
+// Tracking loss: 5 invalid frames keep the grasp with the cube exactly where it was; 60 frames (1 s, beyond
+// the 0.2 s grace) release it at rest (TrackingLost) on the first frame past the grace, and it falls.
+TEST(Step, TrackingLossShortKeepsLongReleasesAtRest) {
+  Scene s;
+  s.grasp();
+  const Pose lifted = s.lift(0.2, 30);
+  const HandFrame hold = s.pinch.frame(lifted, s.hold());
+  const Pose held = s.world.body_pose(s.box);
+  HandFrame lost = hold;
+  lost.joints[kPalm].valid = false;
+  lost.joints[kPalm].position.x() = std::nan("");  // an invalid joint may hold anything
+  for (int i = 0; i < 5; ++i) {
+    s.step({lost});
+    EXPECT_FALSE(s.world.hand_tracked(s.hand));
+    EXPECT_TRUE(s.world.body_grasp(s.box).grasped) << i;
+    expect_pose_near(s.world.body_pose(s.box), held, 0.0, "lost frame " + std::to_string(i));
+  }
+  for (int i = 0; i < 10; ++i) s.step({hold});
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+  EXPECT_EQ(count(s.log, EventType::GraspEnd), 0);
+  int released = -1;
+  for (int i = 0; i < 60; ++i) {
+    s.step({});  // no frame at all: untracked too
+    if (count(s.world.events(), EventType::GraspEnd) > 0) {
+      released = i;
+      const Event& e = s.log.back();
+      EXPECT_EQ(e.reason, EventReason::TrackingLost);
+      EXPECT_EQ(e.hand, s.hand);
+      EXPECT_EQ(e.body, s.box);
+      // Released at rest: one frame of gravity since.
+      EXPECT_LE((s.world.body_linear_velocity(s.box) - s.world.def().gravity * kDt).norm(), 1e-9);
+      EXPECT_LE(s.world.body_angular_velocity(s.box).norm(), 1e-9);
+    }
+  }
+  EXPECT_EQ(released, 12);  // untracked for 13/60 s = 0.217 s > 0.2 s
+  EXPECT_EQ(count(s.log, EventType::GraspEnd), 1);
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
+}
+
+// Contact events name the hand that touched and the body it touched, and nothing else.
+TEST(Step, ContactEventsNameTheRightHandAndBody) {
+  World world;
+  const HandId right = world.add_hand(HandDef{Handedness::Right});
+  const HandId left = world.add_hand(HandDef{Handedness::Left});
+  const BodyId a = world.add_body(cube(Vec3(0, kHalf, 0)));
+  const BodyId b = world.add_body(cube(Vec3(0.4, kHalf, 0)));
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  // A pointing hand (index straight, the rest in a fist) pokes a cube's top from above and goes back up; the
+  // other hand stays far away. (A flat hand pressed deep into a box that cannot move away is grasped: see
+  // docs/grasp.md, limitations.)
+  auto press = [](Handedness side, const Vec3& over, double height) {
+    HandPoseParams point;
+    point.curl = {1, 0, 1, 1, 1};
+    const Pose down{Vec3::Zero(), Quat(Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitX()))};  // fingers along -y
+    HandFrame f = make_hand_frame(side, Pose{}, point);
+    const Vec3 tip = f.joints[kIndexTip].position;
+    return make_hand_frame(side, translation(over + Vec3(0, 2 * kHalf + height, 0)) * down *
+                                     translation(-tip), point);
+  };
+  std::vector<Event> log;
+  for (int i = 0; i < 40; ++i) {
+    const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);  // the tip joint down to 1 cm above, back up
+    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), y), press(Handedness::Left, Vec3(-0.5, 0, 0), 0.3)});
+    log.insert(log.end(), world.events().begin(), world.events().end());
+  }
+  for (int i = 0; i < 40; ++i) {
+    const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);
+    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), 0.3), press(Handedness::Left, Vec3(0, 0, 0), y)});
+    log.insert(log.end(), world.events().begin(), world.events().end());
+  }
+  ASSERT_EQ(log.size(), 4u);
+  EXPECT_EQ(log[0].type, EventType::ContactBegin);
+  EXPECT_EQ(log[1].type, EventType::ContactEnd);
+  EXPECT_EQ(log[2].type, EventType::ContactBegin);
+  EXPECT_EQ(log[3].type, EventType::ContactEnd);
+  EXPECT_TRUE(log[0].hand == right && log[1].hand == right && log[0].body == b && log[1].body == b);
+  EXPECT_TRUE(log[2].hand == left && log[3].hand == left && log[2].body == a && log[3].body == a);
+}
+
+// Bad frames and time steps: a handsim::Error whose argument names the culprit, and nothing changes.
+TEST(Step, BadInputIsRejectedAndLeavesTheWorldUnchanged) {
+  Scene s;
+  s.grasp();
+  const HandFrame good = s.pinch.frame(s.rest, s.hold());
+  auto edited = [&](auto edit) {
+    HandFrame f = good;
+    edit(f);
+    return std::vector<HandFrame>{f};
+  };
+  struct Case {
+    const char* name;
+    std::vector<HandFrame> frames;
+    double dt;
+    const char* argument;
+  };
+  const double nan = std::nan("");
+  const std::vector<Case> cases = {
+      {"more frames than hands", {good, good}, kDt, "hands"},
+      {"NaN in a valid joint", edited([&](HandFrame& f) { f.joints[7].position.y() = nan; }), kDt,
+       "hands[0].joints[7].position"},
+      {"non-unit quaternion", edited([](HandFrame& f) { f.joints[3].orientation = Quat(0.7, 0, 0, 0); }), kDt,
+       "hands[0].joints[3].orientation"},
+      {"wrong handedness", edited([](HandFrame& f) { f.handedness = Handedness::Left; }), kDt,
+       "hands[0].handedness"},
+      {"dt zero", {good}, 0.0, "dt"},
+      {"dt negative", {good}, -kDt, "dt"},
+      {"dt NaN", {good}, nan, "dt"},
+  };
+  const uint64_t hash = s.world.state_hash();
+  const Pose palm = s.world.hand_palm_pose(s.hand);
+  const size_t events = s.world.events().size();
+  for (const Case& c : cases) {
+    try {
+      s.world.step(c.dt, c.frames);
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::InvalidArgument) << c.name;
+      EXPECT_EQ(e.argument(), c.argument) << c.name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(c.argument, 0), 0u) << c.name << ": " << e.what();
+    }
+    EXPECT_EQ(s.world.state_hash(), hash) << c.name;
+    EXPECT_EQ(s.world.events().size(), events) << c.name;
+    expect_pose_near(s.world.hand_palm_pose(s.hand), palm, 0.0, c.name);
+  }
+  // NaN in an invalid joint is legal: that joint is not tracked.
+  s.world.step(kDt, edited([&](HandFrame& f) {
+    f.joints[9].valid = false;
+    f.joints[9].position.x() = nan;
+  }));
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+}
+
+// Removing a held body: GraspEnd (BodyRemoved) and ContactEnd name the hand and the old id, they are still
+// listed after the next step, and no later event or query names the old id.
+TEST(Step, RemovingAHeldBodyEndsItsGraspAndContacts) {
+  Scene s;
+  s.grasp();
+  const HandFrame hold = s.pinch.frame(s.rest, s.hold());
+  const BodyId old = s.box;
+  s.world.remove_body(old);
+  auto check = [&](const std::vector<Event>& ev) {
+    ASSERT_EQ(ev.size(), 2u);
+    EXPECT_EQ(ev[0].type, EventType::GraspEnd);
+    EXPECT_EQ(ev[0].reason, EventReason::BodyRemoved);
+    EXPECT_EQ(ev[1].type, EventType::ContactEnd);
+    for (const Event& e : ev) EXPECT_TRUE(e.hand == s.hand && e.body == old);
+  };
+  check(s.world.events());
+  s.world.step(kDt, {hold});
+  check(s.world.events());  // listed once more, for a caller that reads events after each step
+  s.world.step(kDt, {hold});
+  EXPECT_TRUE(s.world.events().empty());
+  // A new body in the same slot is a stranger to the hand.
+  const BodyId next = s.world.add_body(cube(Vec3(0.5, kHalf, 0)));
+  EXPECT_EQ(next.index, old.index);
+  for (int i = 0; i < 10; ++i) s.world.step(kDt, {hold});
+  EXPECT_TRUE(s.world.events().empty());
+  EXPECT_FALSE(s.world.body_grasp(next).grasped);
+  EXPECT_EQ(s.world.body_motion(next), BodyMotion::Dynamic);
+  EXPECT_THROW(s.world.body_contact_count(old, s.hand), Error);
+}
+
+// Removing the holding hand: the cube is let go at rest (HandRemoved) and falls; the world has no hand left.
+TEST(Step, RemovingTheHoldingHandDropsTheBodyAtRest) {
+  Scene s;
+  s.grasp();
+  s.lift(0.1, 20);
+  s.world.remove_hand(s.hand);
+  ASSERT_EQ(s.world.events().size(), 2u);
+  EXPECT_EQ(s.world.events()[0].type, EventType::GraspEnd);
+  EXPECT_EQ(s.world.events()[0].reason, EventReason::HandRemoved);
+  EXPECT_EQ(s.world.events()[1].type, EventType::ContactEnd);
+  EXPECT_FALSE(s.world.body_grasp(s.box).grasped);
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+  EXPECT_EQ(s.world.body_linear_velocity(s.box).norm(), 0.0);
+  EXPECT_TRUE(s.world.hands().empty());
+  for (int i = 0; i < 60; ++i) s.world.step(kDt);
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
+}
+
+// Teleporting a held body keeps it held at the new pose: the hand's relative pose is re-taken. Moved within
+// the fingers' reach it stays held; moved out of the hand it is held there until the release hysteresis drops it.
+TEST(Step, SetBodyPoseOnAHeldBodyKeepsItHeldThere) {
+  Scene s;
+  s.grasp();
+  const HandFrame hold = s.pinch.frame(s.rest, s.hold());
+  const Pose nudged = translation(Vec3(0.001, 0.001, 0)) * s.world.body_pose(s.box) * rotation(0.02, Vec3::UnitX());
+  s.world.set_body_pose(s.box, nudged);
+  for (int i = 0; i < 30; ++i) {
+    s.step({hold});
+    expect_pose_near(s.world.body_pose(s.box), nudged, 1e-12, "nudged, frame " + std::to_string(i));
+  }
+  expect_pose_near(s.world.hand_palm_pose(s.hand) * s.world.body_grasp(s.box).primary_relative, nudged, 1e-12, "rel");
+  const Pose away = translation(Vec3(0, 0.1, 0)) * nudged;
+  s.world.set_body_pose(s.box, away);
+  const int m = s.world.def().grasp.frames_to_release;
+  for (int i = 1; i < m; ++i) {
+    s.step({hold});
+    expect_pose_near(s.world.body_pose(s.box), away, 1e-12, "away, frame " + std::to_string(i));
+  }
+  s.step({hold});
+  ASSERT_EQ(count(s.world.events(), EventType::GraspEnd), 1);
+  EXPECT_EQ(s.log.back().reason, EventReason::Released);
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
