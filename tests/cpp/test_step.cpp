@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 using namespace handsim;
 
@@ -596,4 +597,68 @@ TEST(Step, SetBodyPoseOnAHeldBodyKeepsItHeldThere) {
   ASSERT_EQ(count(s.world.events(), EventType::GraspEnd), 1);
   EXPECT_EQ(s.log.back().reason, EventReason::Released);
   EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Measurement behind the hysteresis defaults (docs/grasp.md). Not a test; run it with
+//   ./build/dev/tests/cpp/test_step --gtest_also_run_disabled_tests --gtest_filter='*MeasureGraspHysteresis'
+
+// Deterministic N(0, 1) samples (Box-Muller on mt19937, whose output is specified exactly).
+struct Gauss {
+  std::mt19937 rng{1};
+  double operator()() {
+    const double u1 = (rng() + 0.5) / 4294967296.0, u2 = (rng() + 0.5) / 4294967296.0;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  }
+};
+
+struct HysteresisRow {
+  int dither_events = 0;   // grasp begin + end while the thumb dithers +-1 mm around first touch for 2 s
+  int noise_releases = 0;  // GraspEnd while holding for 5 s at touch + grip with `sigma` (m) of thumb jitter
+  int grasp_frames = -1;   // frames from the thumb crossing first touch (closing at 0.5 mm/frame) to GraspBegin
+  int release_frames = -1; // frames from starting to open (2 mm/frame) to GraspEnd
+};
+
+HysteresisRow measure_hysteresis(const GraspSettings& g, double sigma, double grip) {
+  WorldDef def;
+  def.grasp = g;
+  HysteresisRow row;
+  row.dither_events = dithering_grasp_events(g);
+  Scene s(def);
+  s.approach();
+  const double start = s.pinch.touch - 0.005;
+  for (int i = 0; i <= 40 && row.grasp_frames < 0; ++i) {
+    const double closure = start + 0.0005 * i;
+    s.step({s.pinch.frame(s.rest, closure)});
+    if (count(s.world.events(), EventType::GraspBegin) > 0) row.grasp_frames = int(std::lround((closure - s.pinch.touch) / 0.0005));
+  }
+  for (int i = 0; i < 10; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+  const Pose held = s.world.body_pose(s.box);
+  Gauss noise;
+  for (int i = 0; i < 300 && s.world.body_grasp(s.box).grasped; ++i) {
+    s.step({s.pinch.frame(held, s.pinch.touch + grip + sigma * noise())});
+    row.noise_releases += count(s.world.events(), EventType::GraspEnd);
+  }
+  if (!s.world.body_grasp(s.box).grasped) return row;
+  row.release_frames = s.open_hand(s.world.body_pose(s.box), 30);
+  return row;
+}
+
+TEST(Step, DISABLED_MeasureGraspHysteresis) {
+  std::printf("frames_to_grasp frames_to_release release_distance_mm | dither_events releases(firm,1.5mm) "
+              "releases(firm,3mm) releases(light,1.5mm) grasp_latency_frames release_latency_frames\n");
+  auto row = [](int k, int m, double d) {
+    GraspSettings g;
+    g.frames_to_grasp = k;
+    g.frames_to_release = m;
+    g.release_distance = d;
+    const HysteresisRow r = measure_hysteresis(g, 0.0015, 0.003), r3 = measure_hysteresis(g, 0.003, 0.003),
+                        light = measure_hysteresis(g, 0.0015, 0.0005);
+    std::printf("%d %d %.1f | %d %d %d %d %d %d\n", k, m, d * 1e3, r.dither_events, r.noise_releases,
+                r3.noise_releases, light.noise_releases, r.grasp_frames, r.release_frames);
+  };
+  for (int k : {1, 2, 3, 4}) row(k, 3, 0.005);
+  for (int m : {1, 2, 5}) row(2, m, 0.005);
+  for (double d : {0.0, 0.0025, 0.008}) row(2, 3, d);
+  row(1, 1, 0.0);
 }
