@@ -18,7 +18,8 @@ file(REMOVE_RECURSE ${WORK_DIR})
 set(prefix ${WORK_DIR}/prefix)
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --component handsim_native --prefix ${prefix})
 foreach(f include/handsim.h lib/libhandsim.so lib/cmake/handsim/handsimConfig.cmake
-          lib/cmake/handsim/handsimConfigVersion.cmake lib/cmake/handsim/handsimTargets.cmake)
+          lib/cmake/handsim/handsimConfigVersion.cmake lib/cmake/handsim/handsimTargets.cmake
+          share/handsim/csharp/Handsim.cs)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "the install lacks ${f}")
   endif()
