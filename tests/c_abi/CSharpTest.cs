@@ -9,6 +9,7 @@
 // a caller-supplied skinned mesh; disposal.
 using System;
 using System.Collections.Generic;
+using System.Diagnostics;
 using System.IO;
 using System.Reflection;
 using System.Runtime.InteropServices;
@@ -144,10 +145,15 @@ static class CSharpTest
             Event[] events = null;
             double maxAngle = double.MinValue, minAngle = double.MaxValue, maxViolation = 0;
             int grasped = 0, graspBegins = 0;
+            var watch = new Stopwatch();
+            var stepSeconds = new List<double>();
             for (int i = 0; i < Frames; ++i)
             {
                 Hands.MakeFrame(Handedness.Right, world.LidPinchPalm(box, Handedness.Right, ScenarioAngle(i)), shape, input.Joints);
+                watch.Restart();
                 world.Step(Dt, input);
+                watch.Stop();
+                stepSeconds.Add(watch.Elapsed.TotalSeconds);
                 JointState s = world.JointState(box.Hinge);
                 maxAngle = Math.Max(maxAngle, s.Value);
                 minAngle = Math.Min(minAngle, s.Value);
@@ -162,7 +168,8 @@ static class CSharpTest
                 const double deg = Math.PI / 180.0;
                 Console.WriteLine("jewelry box: lid angle max " + (maxAngle / deg).ToString("F4") + " deg, min " +
                                   (minAngle / deg).ToString("F4") + " deg; max violation " + maxViolation.ToString("G3") +
-                                  " m; grasped " + grasped + " of " + Frames + " frames");
+                                  " m; grasped " + grasped + " of " + Frames + " frames; World.Step median " +
+                                  (1e6 * Median(stepSeconds)).ToString("F2") + " us");
                 Check(maxAngle > 60 * deg, "the lid opened only to " + maxAngle / deg + " deg");
                 Check(minAngle >= 0 && maxAngle <= 90 * deg + 1e-12, "the lid left [0, 90] deg");
                 Check(maxViolation <= 1e-9, "hinge violation " + maxViolation);
@@ -435,6 +442,40 @@ static class CSharpTest
         Console.WriteLine("unity conversions: positions (x, y, -z), rotations (-x, -y, z, w), both ways");
     }
 
+    static double Median(List<double> values)
+    {
+        values.Sort();
+        return values.Count == 0 ? 0 : values[values.Count / 2];
+    }
+
+    // What a call costs from C# (printed, not asserted): a cheap query through raw P/Invoke and through the wrapper.
+    static void MeasureCallCost()
+    {
+        using (var world = new World())
+        {
+            JewelryBox box = world.BuildJewelryBox();
+            const int calls = 100000;
+            var raw = new List<double>();
+            var wrapped = new List<double>();
+            var watch = new Stopwatch();
+            double sink = 0;
+            for (int batch = 0; batch < 20; ++batch)
+            {
+                watch.Restart();
+                for (int i = 0; i < calls; ++i) { Pose p; Native.handsim_body_pose(world.Handle, box.Lid, out p); sink += p.Position.Y; }
+                watch.Stop();
+                raw.Add(watch.Elapsed.TotalSeconds / calls);
+                watch.Restart();
+                for (int i = 0; i < calls; ++i) sink += world.BodyPose(box.Lid).Position.Y;
+                watch.Stop();
+                wrapped.Add(watch.Elapsed.TotalSeconds / calls);
+            }
+            Check(!double.IsNaN(sink), "finite poses");
+            Console.WriteLine("body pose query under mono, 20 batches x " + calls + " calls, medians: P/Invoke " +
+                              (1e9 * Median(raw)).ToString("F1") + " ns/call, World.BodyPose " + (1e9 * Median(wrapped)).ToString("F1") + " ns/call");
+        }
+    }
+
     static int Main(string[] args)
     {
         if (args.Length != 1) { Console.Error.WriteLine("usage: CSharpTest.exe <c_host_hash_file>"); return 2; }
@@ -446,6 +487,7 @@ static class CSharpTest
         TestBadInputs();
         TestShapesJointsAndMesh();
         TestUnityConversions();
+        MeasureCallCost();
         Console.WriteLine(checks + " checks, " + failures + " failures");
         return failures == 0 ? 0 : 1;
     }

@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -80,30 +81,71 @@ Run run_c_abi() {
   return r;
 }
 
-// Seconds per call of a cheap query, the C++ method against its C function (min over `reps` batches).
-template <class F>
-double per_call(int reps, int calls, F&& call) {
-  double best = 1e9;
-  for (int rep = 0; rep < reps; ++rep) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < calls; ++i) call();
-    best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count() / calls);
-  }
-  return best;
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
 }
 
-void bench(int reps) {
-  double cpp_best = 1e9, c_best = 1e9;
-  for (int rep = 0; rep < reps; ++rep) {
-    cpp_best = std::min(cpp_best, run_cpp().step_seconds);
-    c_best = std::min(c_best, run_c_abi().step_seconds);
-  }
-  std::printf("scenario step, min over %d runs of %d frames: C++ %.2f us/step, C ABI %.2f us/step "
-              "(difference %+.2f us/step, %+.2f%%)\n",
-              reps, SCENARIO_FRAMES, 1e6 * cpp_best / SCENARIO_FRAMES, 1e6 * c_best / SCENARIO_FRAMES,
-              1e6 * (c_best - cpp_best) / SCENARIO_FRAMES, 100 * (c_best - cpp_best) / cpp_best);
+double seconds_of(const std::function<void()>& f) {
+  const auto t0 = Clock::now();
+  f();
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
-  // A cheap query: World::body_pose against handsim_body_pose (same world contents, 1e6 calls per batch).
+// The scenario through both APIs in lockstep (two worlds, the same frames), each frame's two steps timed back to
+// back in alternating order: on a loaded machine the noise hits both alike, and the median of the per-frame
+// differences is the cost of going through the C ABI. Then a cheap query, World::body_pose against
+// handsim_body_pose, in alternating batches.
+void bench(int reps) {
+  std::vector<double> cpp_steps, c_steps, differences;
+  for (int rep = 0; rep < reps; ++rep) {
+    World world;
+    const JewelryBox box = build_jewelry_box(world);
+    world.add_hand(HandDef{});
+    std::vector<HandFrame> frames(1);
+    handsim_world* cworld = nullptr;
+    handsim_jewelry_box cbox;
+    handsim_hand_id chand = 0;
+    handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
+    const handsim_hand_frame cframe{HANDSIM_RIGHT, HANDSIM_HAND_JOINT_COUNT, joints};
+    MUST(handsim_world_create(nullptr, &cworld));
+    MUST(handsim_build_jewelry_box(cworld, nullptr, &cbox));
+    MUST(handsim_add_hand(cworld, nullptr, &chand));
+    const HandPoseParams shape = lid_pinch_shape();
+    for (int i = 0; i < SCENARIO_FRAMES; ++i) {
+      const Pose palm = box.lid_pinch_palm(world, Handedness::Right, scenario_angle(i));
+      frames[0] = make_hand_frame(Handedness::Right, palm, shape);
+      for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) {
+        const JointPose& p = frames[0].joints[size_t(j)];
+        const Quat& q = p.orientation;
+        joints[j] = {{p.position.x(), p.position.y(), p.position.z()}, {q.x(), q.y(), q.z(), q.w()}, p.radius, 1, 0};
+      }
+      const auto cpp_step = [&] { world.step(SCENARIO_DT, frames); };
+      const auto c_step = [&] { MUST(handsim_step(cworld, SCENARIO_DT, &cframe, 1)); };
+      double t_cpp, t_c;
+      if (i % 2 == 0) {
+        t_cpp = seconds_of(cpp_step);
+        t_c = seconds_of(c_step);
+      } else {
+        t_c = seconds_of(c_step);
+        t_cpp = seconds_of(cpp_step);
+      }
+      cpp_steps.push_back(t_cpp);
+      c_steps.push_back(t_c);
+      differences.push_back(t_c - t_cpp);
+    }
+    uint64_t chash = 0;
+    MUST(handsim_state_hash(cworld, &chash));
+    MUST(handsim_world_destroy(cworld));
+    if (chash != world.state_hash()) {
+      std::fprintf(stderr, "FAIL: the lockstep worlds diverged\n");
+      std::exit(1);
+    }
+  }
+  std::printf("scenario step, %d runs x %d frames in lockstep, medians: C++ %.2f us/step, C ABI %.2f us/step, "
+              "per-frame difference %+.2f us\n",
+              reps, SCENARIO_FRAMES, 1e6 * median(cpp_steps), 1e6 * median(c_steps), 1e6 * median(differences));
+
   World world;
   const JewelryBox box = build_jewelry_box(world);
   handsim_world* cworld = nullptr;
@@ -111,15 +153,22 @@ void bench(int reps) {
   MUST(handsim_world_create(nullptr, &cworld));
   MUST(handsim_build_jewelry_box(cworld, nullptr, &cbox));
   volatile double sink = 0;
-  const int calls = 1000000;
-  const double direct = per_call(reps, calls, [&] { sink = sink + world.body_pose(box.lid).position.y(); });
-  const double via_c = per_call(reps, calls, [&] {
-    handsim_pose p;
-    handsim_body_pose(cworld, cbox.lid, &p);
-    sink = sink + p.position.y;
-  });
-  std::printf("body pose query, min over %d batches of %d calls: C++ %.1f ns/call, C ABI %.1f ns/call\n", reps,
-              calls, 1e9 * direct, 1e9 * via_c);
+  const int calls = 100000;
+  std::vector<double> direct, via_c;
+  for (int batch = 0; batch < 20 * reps; ++batch) {
+    direct.push_back(seconds_of([&] {
+      for (int i = 0; i < calls; ++i) sink = sink + world.body_pose(box.lid).position.y();
+    }) / calls);
+    via_c.push_back(seconds_of([&] {
+      for (int i = 0; i < calls; ++i) {
+        handsim_pose p;
+        handsim_body_pose(cworld, cbox.lid, &p);
+        sink = sink + p.position.y;
+      }
+    }) / calls);
+  }
+  std::printf("body pose query, %d batches x %d calls, medians: C++ %.1f ns/call, C ABI %.1f ns/call\n", 20 * reps,
+              calls, 1e9 * median(direct), 1e9 * median(via_c));
   MUST(handsim_world_destroy(cworld));
 }
 
