@@ -11,7 +11,9 @@
 #include <cstring>
 #include <exception>
 #include <new>
+#include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 // The opaque handle. `magic` catches a handle that is not (or no longer) a world on a best-effort basis.
@@ -100,17 +102,96 @@ inline BodyId body_id(uint64_t packed) { return to_id<BodyTag>(packed); }
 inline JointId joint_id(uint64_t packed) { return to_id<JointTag>(packed); }
 inline HandId hand_id(uint64_t packed) { return to_id<HandTag>(packed); }
 
-JointPose to_cpp(const handsim_joint_pose& j);
-handsim_joint_pose to_c(const JointPose& j);
+// Struct conversions. Each C struct has one field map (c_fields.h): fields(c, cpp, f) calls f(c.x, cpp.x) for every
+// field the two share, so the same list converts both ways: with ToCpp it reads the C struct into the C++ one,
+// with ToC it writes the C struct from the C++ one. C flags are int32_t, enums int32_t, ids packed uint64_t.
+struct ToCpp {
+  void operator()(const double& c, double& d) const { d = c; }
+  void operator()(const int32_t& c, int& d) const { d = c; }
+  void operator()(const uint64_t& c, uint64_t& d) const { d = c; }
+  void operator()(const int32_t& c, bool& d) const { d = c != 0; }
+  template <class E, std::enable_if_t<std::is_enum_v<E>, int> = 0>
+  void operator()(const int32_t& c, E& d) const { d = E(c); }  // out-of-range values are the core's to reject
+  template <class Tag>
+  void operator()(const uint64_t& c, Id<Tag>& d) const { d = Id<Tag>::unpack(c); }
+  void operator()(const handsim_vec3& c, Vec3& d) const { d = to_cpp(c); }
+  void operator()(const handsim_quat& c, Quat& d) const { d = to_cpp(c); }
+  void operator()(const handsim_pose& c, Pose& d) const { d = to_cpp(c); }
+  // An optional C++ field and its C flag ("has_...") and value; `absent` is what the C side shows without one.
+  template <class C, class V>
+  void operator()(const int32_t& has, const C& c, std::optional<V>& d, const V& /*absent*/) const {
+    if (!has) return d.reset();
+    V v;
+    (*this)(c, v);
+    d = v;
+  }
+};
+
+struct ToC {
+  void operator()(double& c, const double& d) const { c = d; }
+  void operator()(int32_t& c, const int& d) const { c = d; }
+  void operator()(uint64_t& c, const uint64_t& d) const { c = d; }
+  void operator()(int32_t& c, const bool& d) const { c = d; }
+  template <class E, std::enable_if_t<std::is_enum_v<E>, int> = 0>
+  void operator()(int32_t& c, const E& d) const { c = int32_t(d); }
+  template <class Tag>
+  void operator()(uint64_t& c, const Id<Tag>& d) const { c = d.packed(); }
+  void operator()(handsim_vec3& c, const Vec3& d) const { c = to_c(d); }
+  void operator()(handsim_quat& c, const Quat& d) const { c = to_c(d); }
+  void operator()(handsim_pose& c, const Pose& d) const { c = to_c(d); }
+  template <class C, class V>
+  void operator()(int32_t& has, C& c, const std::optional<V>& d, const V& absent) const {
+    has = d.has_value();
+    (*this)(c, d ? *d : absent);
+  }
+};
+
+// Declares the field map of C struct CType and C++ struct CppType, for both constnesses (ToCpp reads a const C
+// struct into a C++ one, ToC the other way round). The body names the C struct `c`, the C++ one `d`, the visitor `f`.
+#define HANDSIM_C_FIELDS(CType, CppType)                                                                      \
+  template <class C, class D, class F>                                                                        \
+  std::enable_if_t<std::is_same_v<std::remove_const_t<C>, CType> && std::is_same_v<std::remove_const_t<D>, CppType>> \
+  fields(C& c, D& d, const F& f)
+
+template <class Cpp, class C>
+Cpp from_c(const C& c) {
+  Cpp d{};
+  fields(c, d, ToCpp{});  // found by argument-dependent lookup (ToCpp lives in this namespace)
+  return d;
+}
+
+template <class C, class Cpp>
+C as_c(const Cpp& d) {
+  C c{};
+  fields(c, d, ToC{});
+  return c;
+}
+
 // A frame of the C ABI; `argument` names it in errors ("hands[0]").
 void to_cpp(const handsim_hand_frame& frame, const std::string& argument, HandFrame& out);
 // Writes a frame's 26 joints into a caller buffer of `capacity` joints.
 void write_joints(const HandFrame& frame, handsim_joint_pose* out_joints, int32_t capacity);
 
-HandPoseParams to_cpp(const handsim_hand_pose_params& p);
-handsim_hand_pose_params to_c(const HandPoseParams& p);
-JewelryBoxDef to_cpp(const handsim_jewelry_box_def& d);
-handsim_jewelry_box_def to_c(const JewelryBoxDef& d);
-JewelryBox to_cpp(const handsim_jewelry_box& box);
+// --- the bodies of functions that exist once per kind of id (body, joint, hand) ---
+template <class IdT>
+int contains_id(const handsim_world* world, uint64_t id, int32_t* out_alive) {
+  return guarded([&] {
+    const World& w = checked(world).world;
+    deref(out_alive, "out_alive") = w.contains(IdT::unpack(id));
+  });
+}
+
+template <class IdT>
+int remove_id(handsim_world* world, uint64_t id, void (World::*remove)(IdT)) {
+  return guarded([&] { (checked(world).world.*remove)(IdT::unpack(id)); });
+}
+
+template <class IdT>
+int list_ids(const handsim_world* world, std::vector<IdT> (World::*all)() const, uint64_t* out, int32_t capacity,
+             int32_t* count, const char* out_name) {
+  return guarded([&] { copy_ids((checked(world).world.*all)(), out, capacity, count, out_name); });
+}
 
 }  // namespace handsim::capi
+
+#include "c_fields.h"

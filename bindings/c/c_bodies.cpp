@@ -3,51 +3,20 @@
 
 namespace handsim::capi {
 
-static ShapeDef to_cpp(const handsim_shape& s) {
-  ShapeDef d;
-  d.type = ShapeType(s.type);
-  d.half_extents = capi::to_cpp(s.half_extents);
-  d.radius = s.radius;
-  d.half_height = s.half_height;
+// The field map and the shape's arrays (hull points, mesh vertices and indices), read during the call.
+static BodyDef to_cpp(const handsim_body_def& b) {
+  BodyDef d = from_c<BodyDef>(b);
+  const handsim_shape& s = b.shape;
   if (s.type == HANDSIM_SHAPE_CONVEX_HULL || s.type == HANDSIM_SHAPE_TRIANGLE_MESH) {
     input_array(s.points, s.point_count, "body.shape.points", "body.shape.point_count");
-    d.points.reserve(size_t(s.point_count));
-    for (int32_t i = 0; i < s.point_count; ++i) d.points.push_back(capi::to_cpp(s.points[i]));
+    d.shape.points.reserve(size_t(s.point_count));
+    for (int32_t i = 0; i < s.point_count; ++i) d.shape.points.push_back(capi::to_cpp(s.points[i]));
   }
   if (s.type == HANDSIM_SHAPE_TRIANGLE_MESH) {
     input_array(s.indices, s.index_count, "body.shape.indices", "body.shape.index_count");
-    d.indices.assign(s.indices, s.indices + s.index_count);
+    d.shape.indices.assign(s.indices, s.indices + s.index_count);
   }
   return d;
-}
-
-static BodyDef to_cpp(const handsim_body_def& b) {
-  BodyDef d;
-  d.shape = to_cpp(b.shape);
-  d.mass = b.mass;
-  d.pose = capi::to_cpp(b.pose);
-  d.linear_velocity = capi::to_cpp(b.linear_velocity);
-  d.angular_velocity = capi::to_cpp(b.angular_velocity);
-  d.friction = b.friction;
-  d.restitution = b.restitution;
-  d.kinematic = b.kinematic != 0;
-  return d;
-}
-
-static handsim_body_def to_c(const BodyDef& d) {
-  handsim_body_def b{};
-  b.shape.type = int32_t(d.shape.type);
-  b.shape.half_extents = capi::to_c(d.shape.half_extents);
-  b.shape.radius = d.shape.radius;
-  b.shape.half_height = d.shape.half_height;
-  b.mass = d.mass;
-  b.pose = capi::to_c(d.pose);
-  b.linear_velocity = capi::to_c(d.linear_velocity);
-  b.angular_velocity = capi::to_c(d.angular_velocity);
-  b.friction = d.friction;
-  b.restitution = d.restitution;
-  b.kinematic = d.kinematic;
-  return b;
 }
 
 }  // namespace handsim::capi
@@ -58,7 +27,7 @@ using namespace handsim::capi;
 extern "C" {
 
 HANDSIM_API int HANDSIM_CALL handsim_body_def_default(handsim_body_def* out_def) {
-  return guarded([&] { deref(out_def, "out_def") = capi::to_c(BodyDef{}); });
+  return guarded([&] { deref(out_def, "out_def") = as_c<handsim_body_def>(BodyDef{}); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_add_body(handsim_world* world, const handsim_body_def* body,
@@ -72,22 +41,17 @@ HANDSIM_API int HANDSIM_CALL handsim_add_body(handsim_world* world, const handsi
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_remove_body(handsim_world* world, handsim_body_id body) {
-  return guarded([&] { checked(world).world.remove_body(body_id(body)); });
+  return remove_id<BodyId>(world, body, &World::remove_body);
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_contains_body(const handsim_world* world, handsim_body_id body,
                                                    int32_t* out_alive) {
-  return guarded([&] {
-    const World& w = checked(world).world;
-    deref(out_alive, "out_alive") = w.contains(body_id(body));
-  });
+  return contains_id<BodyId>(world, body, out_alive);
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_bodies(const handsim_world* world, handsim_body_id* out_bodies,
                                             int32_t capacity, int32_t* count) {
-  return guarded([&] {
-    copy_ids(checked(world).world.bodies(), out_bodies, capacity, count, "out_bodies");
-  });
+  return list_ids<BodyId>(world, &World::bodies, out_bodies, capacity, count, "out_bodies");
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_get_body_info(const handsim_world* world, handsim_body_id body,
@@ -157,8 +121,7 @@ HANDSIM_API int HANDSIM_CALL handsim_body_grasp(const handsim_world* world, hand
   return guarded([&] {
     const World& w = checked(world).world;
     handsim_grasp_info& out = deref(out_grasp, "out_grasp");
-    const GraspInfo g = w.body_grasp(body_id(body));
-    out = {g.grasped, 0, g.primary.packed(), g.secondary.packed(), capi::to_c(g.primary_relative)};
+    out = as_c<handsim_grasp_info>(w.body_grasp(body_id(body)));
   });
 }
 

@@ -3,19 +3,6 @@
 
 namespace handsim::capi {
 
-JointPose to_cpp(const handsim_joint_pose& j) {
-  JointPose p;
-  p.position = to_cpp(j.position);
-  p.orientation = to_cpp(j.orientation);
-  p.radius = j.radius;
-  p.valid = j.valid != 0;
-  return p;
-}
-
-handsim_joint_pose to_c(const JointPose& j) {
-  return {to_c(j.position), to_c(j.orientation), j.radius, j.valid, 0};
-}
-
 void to_cpp(const handsim_hand_frame& frame, const std::string& argument, HandFrame& out) {
   if (frame.joint_count != kHandJointCount)
     validate::fail(argument + ".joint_count", "must be " + std::to_string(kHandJointCount) +
@@ -23,7 +10,7 @@ void to_cpp(const handsim_hand_frame& frame, const std::string& argument, HandFr
                                                   std::to_string(frame.joint_count));
   if (!frame.joints) validate::fail(argument + ".joints", "must not be null");
   out.handedness = Handedness(frame.handedness);
-  for (int j = 0; j < kHandJointCount; ++j) out.joints[size_t(j)] = to_cpp(frame.joints[j]);
+  for (int j = 0; j < kHandJointCount; ++j) out.joints[size_t(j)] = from_c<JointPose>(frame.joints[j]);
 }
 
 void write_joints(const HandFrame& frame, handsim_joint_pose* out_joints, int32_t capacity) {
@@ -31,79 +18,7 @@ void write_joints(const HandFrame& frame, handsim_joint_pose* out_joints, int32_
   if (capacity < kHandJointCount)
     validate::fail("out_joints", "capacity " + std::to_string(capacity) + " is too small, needs " +
                                      std::to_string(kHandJointCount));
-  for (int j = 0; j < kHandJointCount; ++j) out_joints[j] = to_c(frame.joints[size_t(j)]);
-}
-
-HandPoseParams to_cpp(const handsim_hand_pose_params& p) {
-  HandPoseParams d;
-  d.curl = {p.curl_thumb, p.curl_index, p.curl_middle, p.curl_ring, p.curl_little};
-  d.thumb_opposition = p.thumb_opposition;
-  d.spread = p.spread;
-  d.scale = p.scale;
-  return d;
-}
-
-handsim_hand_pose_params to_c(const HandPoseParams& d) {
-  return {d.curl[0], d.curl[1], d.curl[2], d.curl[3], d.curl[4], d.thumb_opposition, d.spread, d.scale};
-}
-
-JewelryBoxDef to_cpp(const handsim_jewelry_box_def& c) {
-  JewelryBoxDef d;
-  d.position = to_cpp(c.position);
-  d.yaw = c.yaw;
-  d.base_half_extents = to_cpp(c.base_half_extents);
-  d.lid_half_thickness = c.lid_half_thickness;
-  d.lid_overhang = c.lid_overhang;
-  d.base_mass = c.base_mass;
-  d.lid_mass = c.lid_mass;
-  d.lower = c.lower;
-  d.upper = c.upper;
-  d.damping = c.damping;
-  d.friction = c.friction;
-  d.table = c.table != 0;
-  d.model = JointModel(c.model);
-  d.solver = JointSolver(c.solver);
-  return d;
-}
-
-handsim_jewelry_box_def to_c(const JewelryBoxDef& d) {
-  handsim_jewelry_box_def c{};
-  c.position = to_c(d.position);
-  c.yaw = d.yaw;
-  c.base_half_extents = to_c(d.base_half_extents);
-  c.lid_half_thickness = d.lid_half_thickness;
-  c.lid_overhang = d.lid_overhang;
-  c.base_mass = d.base_mass;
-  c.lid_mass = d.lid_mass;
-  c.lower = d.lower;
-  c.upper = d.upper;
-  c.damping = d.damping;
-  c.friction = d.friction;
-  c.table = d.table;
-  c.model = int32_t(d.model);
-  c.solver = int32_t(d.solver);
-  return c;
-}
-
-JewelryBox to_cpp(const handsim_jewelry_box& box) {
-  return {body_id(box.table), body_id(box.base), body_id(box.lid), joint_id(box.hinge), to_cpp(box.def)};
-}
-
-
-static HandDef to_cpp(const handsim_hand_def& c) {
-  HandDef d;
-  d.handedness = Handedness(c.handedness);
-  d.particle_count = c.particle_count;
-  d.sampling = ParticleSampling(c.sampling);
-  d.seed = c.seed;
-  d.particle_radius = c.particle_radius;
-  d.render_vertices = c.render_vertices;
-  return d;
-}
-
-static handsim_hand_def to_c(const HandDef& d) {
-  return {int32_t(d.handedness), d.particle_count, int32_t(d.sampling), d.render_vertices, d.seed,
-          d.particle_radius};
+  for (int j = 0; j < kHandJointCount; ++j) out_joints[j] = as_c<handsim_joint_pose>(frame.joints[size_t(j)]);
 }
 
 static SkinnedMesh to_cpp(const handsim_skinned_mesh& m) {
@@ -151,22 +66,22 @@ using namespace handsim::capi;
 extern "C" {
 
 HANDSIM_API int HANDSIM_CALL handsim_hand_def_default(handsim_hand_def* out_def) {
-  return guarded([&] { deref(out_def, "out_def") = capi::to_c(HandDef{}); });
+  return guarded([&] { deref(out_def, "out_def") = as_c<handsim_hand_def>(HandDef{}); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_hand_pose_params_default(handsim_hand_pose_params* out_params) {
-  return guarded([&] { deref(out_params, "out_params") = capi::to_c(HandPoseParams{}); });
+  return guarded([&] { deref(out_params, "out_params") = as_c<handsim_hand_pose_params>(HandPoseParams{}); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_jewelry_box_def_default(handsim_jewelry_box_def* out_def) {
-  return guarded([&] { deref(out_def, "out_def") = capi::to_c(JewelryBoxDef{}); });
+  return guarded([&] { deref(out_def, "out_def") = as_c<handsim_jewelry_box_def>(JewelryBoxDef{}); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_add_hand(handsim_world* world, const handsim_hand_def* def,
                                               handsim_hand_id* out_hand) {
   return guarded([&] {
     World& w = checked(world).world;
-    const HandDef d = def ? capi::to_cpp(*def) : HandDef{};
+    const HandDef d = def ? from_c<HandDef>(*def) : HandDef{};
     handsim_hand_id& out = deref(out_hand, "out_hand");
     out = w.add_hand(d).packed();
   });
@@ -177,7 +92,7 @@ HANDSIM_API int HANDSIM_CALL handsim_add_hand_with_mesh(handsim_world* world, co
                                                         const handsim_hand_frame* bind, handsim_hand_id* out_hand) {
   return guarded([&] {
     World& w = checked(world).world;
-    const HandDef d = capi::to_cpp(deref(def, "def"));
+    const HandDef d = from_c<HandDef>(deref(def, "def"));
     const SkinnedMesh m = capi::to_cpp(deref(mesh, "mesh"));
     HandFrame b;
     capi::to_cpp(deref(bind, "bind"), "bind", b);
@@ -187,20 +102,17 @@ HANDSIM_API int HANDSIM_CALL handsim_add_hand_with_mesh(handsim_world* world, co
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_remove_hand(handsim_world* world, handsim_hand_id hand) {
-  return guarded([&] { checked(world).world.remove_hand(hand_id(hand)); });
+  return remove_id<HandId>(world, hand, &World::remove_hand);
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_contains_hand(const handsim_world* world, handsim_hand_id hand,
                                                    int32_t* out_alive) {
-  return guarded([&] {
-    const World& w = checked(world).world;
-    deref(out_alive, "out_alive") = w.contains(hand_id(hand));
-  });
+  return contains_id<HandId>(world, hand, out_alive);
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_hands(const handsim_world* world, handsim_hand_id* out_hands, int32_t capacity,
                                            int32_t* count) {
-  return guarded([&] { copy_ids(checked(world).world.hands(), out_hands, capacity, count, "out_hands"); });
+  return list_ids<HandId>(world, &World::hands, out_hands, capacity, count, "out_hands");
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_get_hand_info(const handsim_world* world, handsim_hand_id hand,
@@ -250,7 +162,7 @@ HANDSIM_API int HANDSIM_CALL handsim_make_hand_frame(int32_t handedness, const h
                                                      handsim_joint_pose* out_joints, int32_t capacity) {
   return guarded([&] {
     const Pose palm = capi::to_cpp(deref(palm_pose, "palm_pose"));
-    const HandPoseParams p = params ? capi::to_cpp(*params) : HandPoseParams{};
+    const HandPoseParams p = params ? from_c<HandPoseParams>(*params) : HandPoseParams{};
     HandFrame frame;
     try {
       frame = make_hand_frame(Handedness(handedness), palm, p);
@@ -276,17 +188,17 @@ HANDSIM_API int HANDSIM_CALL handsim_bind_frame(int32_t handedness, double scale
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_lid_pinch_shape(handsim_hand_pose_params* out_params) {
-  return guarded([&] { deref(out_params, "out_params") = capi::to_c(lid_pinch_shape()); });
+  return guarded([&] { deref(out_params, "out_params") = as_c<handsim_hand_pose_params>(lid_pinch_shape()); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_build_jewelry_box(handsim_world* world, const handsim_jewelry_box_def* jewelry_box,
                                                        handsim_jewelry_box* out_box) {
   return guarded([&] {
     World& w = checked(world).world;
-    const JewelryBoxDef d = jewelry_box ? capi::to_cpp(*jewelry_box) : JewelryBoxDef{};
+    const JewelryBoxDef d = jewelry_box ? from_c<JewelryBoxDef>(*jewelry_box) : JewelryBoxDef{};
     handsim_jewelry_box& out = deref(out_box, "out_box");
     const JewelryBox box = build_jewelry_box(w, d);
-    out = {box.table.packed(), box.base.packed(), box.lid.packed(), box.hinge.packed(), capi::to_c(box.def)};
+    out = as_c<handsim_jewelry_box>(box);
   });
 }
 
@@ -295,7 +207,7 @@ HANDSIM_API int HANDSIM_CALL handsim_jewelry_box_lid_pinch_palm(const handsim_wo
                                                                 double angle, double lift, handsim_pose* out_palm) {
   return guarded([&] {
     const World& w = checked(world).world;
-    const JewelryBox b = capi::to_cpp(deref(box, "box"));
+    const JewelryBox b = from_c<JewelryBox>(deref(box, "box"));
     handsim_pose& out = deref(out_palm, "out_palm");
     if (handedness != HANDSIM_LEFT && handedness != HANDSIM_RIGHT)
       validate::fail("handedness", "must be HANDSIM_LEFT (0) or HANDSIM_RIGHT (1), got " + std::to_string(handedness));
@@ -310,7 +222,7 @@ HANDSIM_API int HANDSIM_CALL handsim_jewelry_box_points(const handsim_world* wor
                                                         handsim_vec3* out_hinge_axis) {
   return guarded([&] {
     const World& w = checked(world).world;
-    const JewelryBox b = capi::to_cpp(deref(box, "box"));
+    const JewelryBox b = from_c<JewelryBox>(deref(box, "box"));
     const Vec3 front = b.lid_front(w), pivot = b.hinge_pivot(w), axis = b.hinge_axis(w);
     if (out_lid_front) *out_lid_front = capi::to_c(front);
     if (out_hinge_pivot) *out_hinge_pivot = capi::to_c(pivot);

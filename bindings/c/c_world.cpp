@@ -3,46 +3,6 @@
 
 namespace handsim::capi {
 
-static WorldDef to_cpp(const handsim_world_settings& s) {
-  WorldDef d;
-  d.gravity = to_cpp(s.gravity);
-  d.fixed_substep = s.fixed_substep;
-  d.max_substeps = s.max_substeps;
-  d.ground = s.ground != 0;
-  d.ground_height = s.ground_height;
-  d.ground_friction = s.ground_friction;
-  d.solver_iterations = s.solver_iterations;
-  d.joint_max_iterations = s.joint_max_iterations;
-  d.grasp.cos_threshold = s.grasp.cos_threshold;
-  d.grasp.release_distance = s.grasp.release_distance;
-  d.grasp.tracking_grace_s = s.grasp.tracking_grace_s;
-  d.grasp.frames_to_grasp = s.grasp.frames_to_grasp;
-  d.grasp.frames_to_release = s.grasp.frames_to_release;
-  d.grasp.velocity_window = s.grasp.velocity_window;
-  d.particle_contacts = WorldDef::ParticleContacts(s.particle_contacts);
-  return d;
-}
-
-static handsim_world_settings to_c(const WorldDef& d) {
-  handsim_world_settings s{};
-  s.gravity = capi::to_c(d.gravity);
-  s.fixed_substep = d.fixed_substep;
-  s.max_substeps = d.max_substeps;
-  s.ground = d.ground;
-  s.ground_height = d.ground_height;
-  s.ground_friction = d.ground_friction;
-  s.solver_iterations = d.solver_iterations;
-  s.joint_max_iterations = d.joint_max_iterations;
-  s.grasp.cos_threshold = d.grasp.cos_threshold;
-  s.grasp.release_distance = d.grasp.release_distance;
-  s.grasp.tracking_grace_s = d.grasp.tracking_grace_s;
-  s.grasp.frames_to_grasp = d.grasp.frames_to_grasp;
-  s.grasp.frames_to_release = d.grasp.frames_to_release;
-  s.grasp.velocity_window = d.grasp.velocity_window;
-  s.particle_contacts = int32_t(d.particle_contacts);
-  return s;
-}
-
 static size_t live_hands(const World& world) { return world.hands().size(); }
 
 }  // namespace handsim::capi
@@ -53,13 +13,13 @@ using namespace handsim::capi;
 extern "C" {
 
 HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settings* out_settings) {
-  return guarded([&] { deref(out_settings, "out_settings") = capi::to_c(WorldDef{}); });
+  return guarded([&] { deref(out_settings, "out_settings") = as_c<handsim_world_settings>(WorldDef{}); });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_world_create(const handsim_world_settings* settings, handsim_world** out_world) {
   return guarded([&] {
     handsim_world*& out = deref(out_world, "out_world");
-    const WorldDef def = settings ? capi::to_cpp(*settings) : WorldDef{};
+    const WorldDef def = settings ? from_c<WorldDef>(*settings) : WorldDef{};
     try {
       validate_grasp_settings(def.grasp);  // it names the bare field ("frames_to_grasp")
     } catch (const Error& e) {
@@ -88,7 +48,7 @@ HANDSIM_API int HANDSIM_CALL handsim_world_reset(handsim_world* world) {
 HANDSIM_API int HANDSIM_CALL handsim_get_world_settings(const handsim_world* world, handsim_world_settings* out_settings) {
   return guarded([&] {
     const World& w = checked(world).world;
-    deref(out_settings, "out_settings") = capi::to_c(w.def());
+    deref(out_settings, "out_settings") = as_c<handsim_world_settings>(w.def());
   });
 }
 
@@ -148,8 +108,7 @@ HANDSIM_API int HANDSIM_CALL handsim_events(const handsim_world* world, handsim_
     const std::vector<Event>& events = checked(world).world.events();
     if (!output_buffer(out_events, capacity, count, events.size(), "out_events")) return;
     for (size_t i = 0; i < events.size(); ++i)
-      out_events[i] = {int32_t(events[i].type), int32_t(events[i].reason), events[i].hand.packed(),
-                       events[i].body.packed()};
+      out_events[i] = as_c<handsim_event>(events[i]);
   });
 }
 
