@@ -12,6 +12,7 @@
 #include "scenario.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cinttypes>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include <cstring>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -172,6 +174,26 @@ void bench(int reps) {
   MUST(handsim_world_destroy(cworld));
 }
 
+// The threading rules of handsim.h: worlds on different threads step concurrently and identically, and each
+// thread reads its own last error.
+bool threads_are_independent(uint64_t expected_hash) {
+  std::atomic<int> failures{0};
+  auto worker = [&](int k) {
+    if (run_c_abi().hash != expected_hash) ++failures;
+    handsim_pose pose;
+    handsim_layout_entry entry;
+    const int status = k == 0 ? handsim_body_pose(nullptr, 0, &pose) : handsim_layout(-1, &entry);
+    for (int i = 0; i < 1000; ++i) std::this_thread::yield();  // let the other thread fail in between
+    const std::string expected = k == 0 ? "world: must not be null" : "index: must be in 0..";
+    if (status != HANDSIM_INVALID_ARGUMENT || std::string(handsim_last_error()).rfind(expected, 0) != 0) ++failures;
+  };
+  std::thread a(worker, 0), b(worker, 1);
+  a.join();
+  b.join();
+  std::printf("two threads, two worlds: %s\n", failures == 0 ? "same hash, own last error" : "FAILED");
+  return failures == 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -193,6 +215,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "FAIL: the C ABI and the C++ API disagree\n");
     return 1;
   }
+  if (!threads_are_independent(cpp.hash)) return 1;
   if (argc == 4) bench(std::max(1, std::atoi(argv[3])));
   return 0;
 }
