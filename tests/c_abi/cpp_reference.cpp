@@ -88,6 +88,12 @@ double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
+double stage_seconds(const std::vector<StageReport>& reports) {
+  double sum = 0;
+  for (const StageReport& r : reports) sum += r.seconds;
+  return sum;
+}
+
 double seconds_of(const std::function<void()>& f) {
   const auto t0 = Clock::now();
   f();
@@ -100,6 +106,7 @@ double seconds_of(const std::function<void()>& f) {
 // handsim_body_pose, in alternating batches.
 void bench(int reps) {
   std::vector<double> cpp_steps, c_steps, differences;
+  std::vector<double> cpp_outside, c_outside;  // a step's wall time minus what its stages report
   for (int rep = 0; rep < reps; ++rep) {
     World world;
     const JewelryBox box = build_jewelry_box(world);
@@ -135,6 +142,13 @@ void bench(int reps) {
       cpp_steps.push_back(t_cpp);
       c_steps.push_back(t_c);
       differences.push_back(t_c - t_cpp);
+      cpp_outside.push_back(t_cpp - stage_seconds(world.stage_reports()));
+      std::vector<handsim_stage_report> reports(16);
+      int32_t n = 0;
+      MUST(handsim_stage_reports(cworld, reports.data(), int32_t(reports.size()), &n));
+      double in_stages = 0;
+      for (int32_t k = 0; k < n; ++k) in_stages += reports[size_t(k)].seconds;
+      c_outside.push_back(t_c - in_stages);
     }
     uint64_t chash = 0;
     MUST(handsim_state_hash(cworld, &chash));
@@ -147,6 +161,9 @@ void bench(int reps) {
   std::printf("scenario step, %d runs x %d frames in lockstep, medians: C++ %.2f us/step, C ABI %.2f us/step, "
               "per-frame difference %+.2f us\n",
               reps, SCENARIO_FRAMES, 1e6 * median(cpp_steps), 1e6 * median(c_steps), 1e6 * median(differences));
+  std::printf("scenario step outside the core's stages (call, validation, frame copy), medians: C++ %.2f us, "
+              "C ABI %.2f us\n",
+              1e6 * median(cpp_outside), 1e6 * median(c_outside));
 
   World world;
   const JewelryBox box = build_jewelry_box(world);
