@@ -9,6 +9,7 @@ Bullet's soft btHingeConstraint, at 10 and 200 solver iterations.
 A full run (not --quick) also writes docs/img/joints_error_vs_time.png and regenerates docs/joints.md.
 """
 import math
+import os
 import platform
 import sys
 from pathlib import Path
@@ -321,15 +322,25 @@ def strip_series(groups):
 
 def run(quick=False):
     ns = (8, 64, 1182) if quick else (8, 64, 1182, 39225)
+    load_before = _load()
     rows, guard = run_solves(ns, k=6 if quick else 24, repeats=3 if quick else 5)
     cycles = 1 if quick else 3
     result = {"solves": rows, "groups": run_groups(cycles), "speed": speed_ratios(rows),
               "near_axis_default_guard": guard, "quick": quick,
               # the box's default 0.5 kg base, free on the table: what the pull does to the whole group
-              "groups_dynamic_base": strip_series(run_groups(cycles, JEWELRY_BASE_MASS, iterations=(10,)))}
+              "groups_dynamic_base": strip_series(run_groups(cycles, JEWELRY_BASE_MASS, iterations=(10,))),
+              "machine": _machine(), "cpu_count": os.cpu_count(), "load_average": [load_before, _load()]}
     if not quick:
         write_report(result)
     return result
+
+
+def _load():
+    """The 1-minute load average (other processes compete for the cores while timing), or None."""
+    try:
+        return os.getloadavg()[0]
+    except OSError:
+        return None
 
 
 def _us(seconds):
@@ -397,7 +408,7 @@ def plot(result, path):
     floor = 1e-18
     markers = dict(zip(CLASSES, "osD^v<>"))
     colors = {"exact": "tab:blue", "lm": "tab:orange", "lm_ceres": "tab:green"}
-    fig, ax = plt.subplots(figsize=(8, 5.5))
+    fig, ax = plt.subplots(figsize=(9, 5.5))
     for s in solver_list():
         for pose_class in CLASSES:
             rows = sorted((r for r in result["solves"] if r["solver"] == s and r["pose_class"] == pose_class),
@@ -418,7 +429,7 @@ def plot(result, path):
     from matplotlib.lines import Line2D
     handles = [Line2D([], [], color=c, label=s) for s, c in colors.items() if s in solver_list()]
     handles += [Line2D([], [], color="gray", marker=m, linestyle="", label=c) for c, m in markers.items()]
-    ax.legend(handles=handles, fontsize=8, loc="center right")
+    ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(True, which="major", linewidth=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -516,7 +527,11 @@ def report_markdown(result, command, figures):
     w(command)
     w("```")
     w("")
-    w(f"*on {_machine()}, single thread. Do not edit by hand: rerun the command.*")
+    load = result.get("load_average", [None, None])
+    busy = (f" The machine's 1-minute load average was {load[0]:.1f} when the solves started and {load[1]:.1f}"
+            f" at the end, on {result.get('cpu_count')} cores: other work competed for them, so treat times as"
+            " upper bounds and ratios as approximate." if None not in load else "")
+    w(f"*on {result.get('machine', _machine())}, single thread. Do not edit by hand: rerun the command.*{busy}")
     w("")
     w("The micro-simulator of Kim & Park (Sec. III-A, eq. 4) finds the hinge angle whose child pose best matches")
     w("the pose the hand gave the child, over the child's model vertices, within the limits. handsim has three")
