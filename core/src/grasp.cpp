@@ -100,7 +100,7 @@ GraspTracker::GraspTracker(const GraspSettings& settings) : settings_(settings) 
 
 void GraspTracker::reset() {
   state_ = GraspState::Free;
-  grasp_streak_ = empty_streak_ = 0;
+  grasp_streak_ = open_streak_ = 0;
   untracked_s_ = 0;
 }
 
@@ -116,20 +116,21 @@ GraspEvent GraspTracker::update_free(const GraspInput& in) {
   grasp_streak_ = condition ? grasp_streak_ + 1 : 0;
   if (grasp_streak_ < settings_.frames_to_grasp) return {};
   state_ = GraspState::Grasped;
-  grasp_streak_ = empty_streak_ = 0;
+  grasp_streak_ = open_streak_ = 0;
   untracked_s_ = 0;
   return {GraspEventType::GraspBegin, ReleaseReason::None, false};
 }
 
 GraspEvent GraspTracker::update_grasped(const GraspInput& in) {
   if (!in.hand_tracked) {
-    // Hold through short dropouts; the empty-contact streak is frozen, not reset, since nothing was observed.
+    // Hold through short dropouts; the open-hand streak is frozen, not reset, since nothing was observed.
     untracked_s_ += in.dt;
     return untracked_s_ > settings_.tracking_grace_s ? end(ReleaseReason::TrackingLost) : GraspEvent{};
   }
   untracked_s_ = 0;
-  empty_streak_ = in.contact_count == 0 ? empty_streak_ + 1 : 0;
-  return empty_streak_ >= settings_.frames_to_release ? end(ReleaseReason::Released) : GraspEvent{};
+  const bool holding = in.opposing && in.contact_count >= 2;
+  open_streak_ = holding ? 0 : open_streak_ + 1;
+  return open_streak_ >= settings_.frames_to_release ? end(ReleaseReason::Released) : GraspEvent{};
 }
 
 GraspEvent GraspTracker::end(ReleaseReason reason) {

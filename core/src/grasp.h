@@ -40,8 +40,11 @@ struct GraspInput {
 
 // The grasp state machine of one (hand, object) pair.
 //  Free -> Grasped: tracked, opposing and >= 2 contacts for frames_to_grasp consecutive frames.
-//  Grasped -> Free (Released): tracked with 0 contacts for frames_to_release consecutive frames; the
-//    opposition condition alone does not release (a held object's contacts change as fingers slide).
+//  Grasped -> Free (Released): tracked without an opposing pair for frames_to_release consecutive frames.
+//    The world counts a held object's contacts within GraspSettings::release_distance of its surface, so
+//    fingers that slide on it or jitter off it by less than that keep it; fingers that open further drop it,
+//    even while one finger or the palm still touches it (a box resting against the index after the thumb
+//    has opened is no longer held: waiting for every contact to vanish would glue it to the hand).
 //  Grasped -> Free (TrackingLost, zero_velocity): the hand stays untracked for longer than tracking_grace_s.
 //    While untracked within the grace time the grasp holds and contact counts (stale) are ignored.
 class GraspTracker {
@@ -64,7 +67,7 @@ class GraspTracker {
   GraspSettings settings_;
   GraspState state_ = GraspState::Free;
   int grasp_streak_ = 0;    // consecutive frames meeting the grasp condition (Free)
-  int empty_streak_ = 0;    // consecutive tracked frames without contacts (Grasped)
+  int open_streak_ = 0;     // consecutive tracked frames without an opposing pair (Grasped)
   double untracked_s_ = 0;  // time since tracking was lost (Grasped)
 };
 

@@ -157,14 +157,14 @@ void World::remove_body(BodyId id) {
   for (const Joint& j : w.joints)
     if (j.alive && (j.child == id.index || j.parent == id.index))
       validate::fail("body", "a joint still uses it; remove the joint first", Status::InvalidState);
-  // Let go of it first, so the hands' grasp state and the events stay consistent.
+  // Let go of it first, so the hands' grasp state and the events stay consistent: every hand holding it
+  // gets a GraspEnd, every hand touching it a ContactEnd, and no pair keeps the slot index it leaves behind.
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
     if (it->first.second != id.index) {
       ++it;
       continue;
     }
-    if (it->second.tracker.grasped())
-      w.events.push_back({EventType::GraspEnd, w.hand_id(it->first.first), id, EventReason::BodyRemoved});
+    w.end_pair(it->first.first, id.index, EventReason::BodyRemoved);
     it = w.pairs.erase(it);
   }
   w.backend->remove(b.backend);
@@ -248,8 +248,8 @@ void World::remove_hand(HandId id) {
       ++it;
       continue;
     }
-    if (it->second.tracker.grasped())
-      w.end_grasp(id.index, it->first.second, EventReason::TrackingLost, true);
+    // A body it held alone falls at rest; one it shared stays with the other hand.
+    w.end_pair(id.index, it->first.second, EventReason::HandRemoved);
     it = w.pairs.erase(it);
   }
   release_slot(w.hands, w.free_hand_slots, id.index);
@@ -290,8 +290,8 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
     validate::fail("body", "is the child of a hard joint; move its parent or set the joint value",
                    Status::InvalidState);
   b.pose = b.synced_pose = p;
-  // A held body stays held where it was put: its pose relative to the hand is re-taken.
-  if (b.grasp.grasped) b.grasp.primary_relative = impl_->hands[b.grasp.primary.index].palm.inverse() * p;
+  // Without this the attach stage would put a held body straight back into the hand.
+  impl_->retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
   if (!impl_->joint_order.empty()) impl_->place_children();
 }

@@ -31,13 +31,23 @@ struct Body {
   Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
   Vec3 unit_inertia = Vec3::Ones();  // principal moments per kg, body frame (for hard joints' dynamics)
   int hard_joint = -1;  // index of the hard joint whose child this is, or -1
-  int soft_joint = -1;
+  int soft_joint = -1;  // index of a soft joint whose child this is (driven by the hand, not attached)
   // Pushed by a hand against gravity this frame (eq. 2): the hand carries the body's weight, so gravity is
   // off for the frame; otherwise a slow push from below could never lift anything.
-  bool supported = false;  // index of a soft joint whose child this is (driven by the hand, not attached)
+  bool supported = false;
+
+  // Released by its hand in this step: it leaves with the hand's velocity, which the object-centred update
+  // must not replace in the same step (the fingers that just let go still press it by the grip's depth).
+  bool just_released = false;
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
   bool jointed() const { return hard_joint >= 0; }
+  // Whether the hand in slot `hand` holds this body, as primary or secondary. (A null secondary id has
+  // index 0 too, so comparing indices alone would make hand slot 0 hold every singly held body.)
+  bool held_by(uint32_t hand) const {
+    return grasp.grasped &&
+           (grasp.primary.index == hand || (!grasp.secondary.is_null() && grasp.secondary.index == hand));
+  }
 };
 
 constexpr uint32_t kWorldParent = UINT32_MAX;
@@ -106,6 +116,9 @@ struct World::Impl {
   std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
   std::vector<Event> events;
   uint64_t body_version = 1;  // bumped on add/remove body, so per-hand caches know to rebuild
+  // How many of `events` (at the front) the last step raised. The next step drops those and keeps the ones
+  // that removals raised after it, so a caller who reads events() after each step sees those too.
+  size_t step_events = 0;
   std::vector<StageReport> reports;
   double time = 0;
   double accumulator = 0;
@@ -142,6 +155,12 @@ struct World::Impl {
   // Grasp bookkeeping (world_step.cpp).
   void begin_grasp(uint32_t hand, uint32_t body);
   void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
+  void hand_over(Body& b);
+  void release(Body& b, const BodyVelocity& velocity);
+  void retake_relative_poses(Body& b);
+  // Ends what a (hand, body) pair has going on before one of them is removed: GraspEnd with `reason` when
+  // the hand holds the body, ContactEnd when it touched it. The caller erases the pair.
+  void end_pair(uint32_t hand, uint32_t body, EventReason reason);
   void set_motion(Body& b, BodyMotion motion);
 
   // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.

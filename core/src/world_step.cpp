@@ -12,7 +12,7 @@ namespace handsim {
 void World::step(double dt, const std::vector<HandFrame>& frames) {
   Impl& w = *impl_;
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
-  w.events.clear();
+  w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(w.step_events));
   w.reports.clear();
   auto stage = [&w](const char* name, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -31,6 +31,7 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
   stage("joints", [&] { return w.solve_joints(dt); });             // line 19: eq. 4
   stage("slip", [&] { return w.retake_secondary_hands(); });     // line 20: eq. 5
   w.time += dt;
+  w.step_events = w.events.size();
 }
 
 void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames) const {
@@ -95,8 +96,7 @@ std::string World::Impl::detect_contacts() {
       Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
-      const bool held = b.grasp.grasped && (b.grasp.primary.index == hi || b.grasp.secondary.index == hi);
-      const double margin = held ? def.grasp.release_distance : 0.0;
+      const double margin = b.held_by(hi) ? def.grasp.release_distance : 0.0;
       Vec3 lo, hi_b;
       shape_world_bounds(b.shape, b.pose, lo, hi_b);
       if (!def.paper_pipeline &&
@@ -187,10 +187,11 @@ std::string World::Impl::decide_grasps(double dt) {
       for (const ParticleContact& c : pair.contacts) directions.push_back(c.normal);
       const bool opposing = count >= 2 && opposing_contacts(directions, def.grasp.cos_threshold);
       const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
-      if (e.type == GraspEventType::GraspBegin) begin_grasp(hi, bi);
       if (e.type == GraspEventType::GraspEnd)
         end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);
+      // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
+      if (pair.tracker.grasped() && !b.held_by(hi)) begin_grasp(hi, bi);
       ++decided;
     }
     // Forget pairs with nothing going on, so the map holds only what touches or holds.
@@ -220,29 +221,54 @@ void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
 
 void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
   Body& b = bodies[bi];
-  const HandSlot& h = hands[hi];
-  const bool primary = b.grasp.grasped && b.grasp.primary.index == hi;
-  const bool secondary = !b.grasp.secondary.is_null() && b.grasp.secondary.index == hi;
-  if (!primary && !secondary) return;
-  if (secondary) {
-    b.grasp.secondary = HandId{};
-  } else if (!b.grasp.secondary.is_null()) {
-    // The other hand takes over from where the body is now: no jump.
-    const HandSlot& other = hands[b.grasp.secondary.index];
-    b.grasp.primary = b.grasp.secondary;
-    b.grasp.primary_relative = other.palm.inverse() * b.pose;
+  if (!b.held_by(hi)) return;
+  if (b.grasp.primary.index != hi) {
     b.grasp.secondary = HandId{};
   } else if (b.jointed() || b.soft_joint >= 0) {
-    b.grasp = GraspInfo();  // the joint keeps the velocity the hand gave it
+    // A joint's child is never teleported to the hand: the other hand takes over where the child is, or
+    // the joint keeps the velocity the hand gave it.
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else b.grasp = GraspInfo();
   } else {
-    b.grasp = GraspInfo();
-    set_motion(b, BodyMotion::Dynamic);
-    const BodyVelocity v = zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position);
-    b.linear = v.linear;
-    b.angular = v.angular;
-    backend->write(b.backend, b.pose, b.linear, b.angular);
+    // The attach stage has not run yet this frame: first put the body where its hand holds it now, so a
+    // released body starts from the hand's current pose (with the velocity of that point), and a body handed
+    // over starts from there too.
+    const HandSlot& h = hands[hi];
+    b.pose = h.palm * b.grasp.primary_relative;
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else release(b, zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position));
   }
   events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
+}
+
+// The secondary hand becomes primary, taking the body from where it is: no jump.
+void World::Impl::hand_over(Body& b) {
+  b.grasp.primary = b.grasp.secondary;
+  b.grasp.secondary = HandId{};
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::release(Body& b, const BodyVelocity& velocity) {
+  b.grasp = GraspInfo();
+  b.just_released = true;
+  b.linear = velocity.linear;
+  b.angular = velocity.angular;
+  set_motion(b, BodyMotion::Dynamic);
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
+// A held body moved by the caller stays held where it now is.
+void World::Impl::retake_relative_poses(Body& b) {
+  if (!b.grasp.grasped) return;
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+  if (!b.grasp.secondary.is_null()) b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
+  auto it = pairs.find({hi, bi});
+  if (bodies[bi].held_by(hi)) end_grasp(hi, bi, reason, true);
+  if (it != pairs.end() && it->second.previous_count > 0)
+    events.push_back({EventType::ContactEnd, hand_id(hi), body_id(bi)});
 }
 
 void World::Impl::set_motion(Body& b, BodyMotion motion) {
@@ -270,40 +296,53 @@ std::string World::Impl::follow_primary_hands() {
 }
 
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
-// The fitted motion is applied as the body's velocity over this frame rather than as a teleport: in free
-// space both give the same pose, but with a velocity Bullet still resolves the table and other bodies, so
-// a hand pressing a box down cannot push it through the table.
+// The fitted motion is applied as a velocity over this frame rather than as a teleport: in free space both
+// give the same pose, but with a velocity Bullet still resolves the table and other bodies, so a hand
+// pressing a box down cannot push it through the table. The velocity is the touching hands' own velocity at
+// the body plus the fitted correction: the fit only sees what still penetrates after the body's last frame of
+// motion, so the correction alone would stop a body that moves along with the hand (a box thrown while the
+// index still touches it, a box pushed by a moving palm) every frame. With the hand's velocity as the base, a
+// body carried by a moving hand keeps its speed, and one under a still hand gets exactly the correction.
 std::string World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3> from, to;
   int fitted = 0;
   for (Body& b : bodies) b.supported = false;
   for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
     Body& b = bodies[bi];
-    if (!b.manipulable() || b.grasp.grasped) continue;
+    const bool just_released = b.just_released;
+    b.just_released = false;
+    if (!b.manipulable() || b.grasp.grasped || just_released) continue;
     from.clear();
     to.clear();
+    BodyVelocity carried;
     for (auto& entry : pairs) {
       if (entry.first.second != bi) continue;
+      const size_t before = from.size();
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
         from.push_back(c.point);
         to.push_back(c.point - c.normal * c.depth);  // where the surface must go to stop the penetration
       }
+      const BodyVelocity v = hands[entry.first.first].history.attached_body_velocity(b.pose.position);
+      carried.linear += double(from.size() - before) * v.linear;
+      carried.angular += double(from.size() - before) * v.angular;
     }
     if (from.empty()) continue;
-    const RigidMotion motion = fit_rigid_motion(from, to);
+    const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
+    const Vec3 linear = carried.linear / double(from.size()) + correction.linear;
+    const Vec3 angular = carried.angular / double(from.size()) + correction.angular;
+    b.supported = linear.dot(def.gravity) < 0;
     if (b.jointed()) {
-      // The push moves the child only along its joint: eq. 2's motion projected by the micro-simulator.
-      const Pose simulated = apply_motion(motion, b.pose);
-      b.supported = (simulated.position - b.pose.position).dot(def.gravity) < 0;
+      // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
+      const double turn = angular.norm() * dt;
+      const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
+      const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
       project_push(joints[b.hard_joint], simulated, dt);
       ++fitted;
       continue;
     }
-    const BodyVelocity v = velocity_from_motion(motion, b.pose.position, dt);
-    b.supported = v.linear.dot(def.gravity) < 0;
-    b.linear = v.linear;
-    b.angular = v.angular;
+    b.linear = linear;
+    b.angular = angular;
     backend->write(b.backend, b.pose, b.linear, b.angular);
     ++fitted;
   }

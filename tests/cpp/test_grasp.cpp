@@ -158,21 +158,20 @@ TEST(GraspTracker, DitheringConditionNeverGrasps) {
   EXPECT_FALSE(t.grasped());
 }
 
-TEST(GraspTracker, ReleaseNeedsContactsGoneForMFrames) {
+TEST(GraspTracker, ReleaseNeedsOppositionGoneForMFrames) {
   GraspTracker t;  // m = 3
   t.update(frame(true, 4));
   t.update(frame(true, 4));
   ASSERT_TRUE(t.grasped());
-  // Opposition lost but contacts remain (fingers sliding): still held.
-  for (int i = 0; i < 20; ++i) EXPECT_EQ(t.update(frame(false, 2)).type, GraspEventType::None);
-  // Single frames and pairs of frames without contacts do not release.
+  // Single frames and pairs of frames without opposition (or without contacts) do not release.
   for (int i = 0; i < 30; ++i) {
-    EXPECT_EQ(t.update(frame(false, i % 3 == 2 ? 1 : 0)).type, GraspEventType::None) << i;
+    EXPECT_EQ(t.update(frame(i % 3 == 2, i % 3 == 2 ? 2 : i % 2)).type, GraspEventType::None) << i;
     EXPECT_TRUE(t.grasped());
   }
+  // "Opposing" with a single contact is no hold either.
+  EXPECT_EQ(t.update(frame(true, 1)).type, GraspEventType::None);
   EXPECT_EQ(t.update(frame(false, 0)).type, GraspEventType::None);
-  EXPECT_EQ(t.update(frame(false, 0)).type, GraspEventType::None);
-  GraspEvent e = t.update(frame(false, 0));
+  GraspEvent e = t.update(frame(false, 3));  // the thumb opened, the index still touches: released
   EXPECT_EQ(e.type, GraspEventType::GraspEnd);
   EXPECT_EQ(e.reason, ReleaseReason::Released);
   EXPECT_FALSE(e.zero_velocity);
@@ -191,13 +190,13 @@ TEST(GraspTracker, ShortTrackingLossKeepsGrasp) {
     EXPECT_TRUE(t.grasped());
   }
   EXPECT_NEAR(t.untracked_time(), 5.0 / 60, 1e-12);
-  t.update(frame(false, 3, true));
+  t.update(frame(true, 3, true));
   EXPECT_TRUE(t.grasped());
   EXPECT_EQ(t.untracked_time(), 0.0);
   // Repeated short losses do not add up.
   for (int r = 0; r < 10; ++r) {
     for (int i = 0; i < 10; ++i) t.update(frame(false, 0, false));
-    t.update(frame(false, 3, true));
+    t.update(frame(true, 3, true));
   }
   EXPECT_TRUE(t.grasped());
 }

@@ -12,19 +12,18 @@ namespace handsim {
 constexpr double kOpposingCos = -0.7;
 constexpr double kPaperLiteralCos = 0.7;
 
-// Defaults assume a 60 Hz tracker (~30-90 Hz are common); the world issue is to measure them on recordings.
+// Defaults assume a 60 Hz tracker; they were chosen by measurement (docs/grasp.md has the table and the command).
 struct GraspSettings {
   double cos_threshold = kOpposingCos;  // c of opposing_contacts (see kPaperLiteralCos)
-  // 2 frames (33 ms at 60 Hz): a single frame of tracking jitter that pushes two particles into opposite
-  // faces must not grab the object, while the added latency stays below what users notice (~50 ms).
+  // 2 frames (17 ms of latency): 1 grabs on a single frame of touch (a thumb dithering +-1 mm at first touch
+  // grabbed at once); 2 made no grasp event in 2 s of such dithering.
   int frames_to_grasp = 2;
-  // 3 frames (50 ms): contacts of a held object flicker for a frame or two as the fingers jitter on its
-  // surface; releasing needs them gone for longer than that. Slightly longer than grasping because a false
-  // drop is worse than a late grab.
+  // 3 frames without an opposing pair release: 1 dropped a firmly held cube under 3 mm thumb jitter; 2 had
+  // no margin; 3 costs one more frame.
   int frames_to_release = 3;
-  // Not used by GraspTracker: the world's contact query for a *grasped* object should count particles within
-  // this distance (m) of its surface as contacts, because an attached object no longer gets penetrated and
-  // its contacts would otherwise vanish at once. 5 mm ~ one particle radius of the default hand.
+  // A held object's particles count as holding it while their spheres stay within this distance (m) of its
+  // surface, since an attached object is no longer penetrated. 0 dropped a lightly held cube
+  // under 1.5 mm jitter; 5 mm keeps > 3 sigma of margin for ~1 frame of release latency per 2.5 mm.
   double release_distance = 0.005;
   // 0.2 s: typical optical-tracking dropouts (occlusion by the other hand, a finger leaving the view) last
   // a few frames; a hand that is really gone is released within a fifth of a second.

@@ -62,9 +62,10 @@ struct GraspInfo {
 };
 
 enum class EventType : int { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 };
-enum class EventReason : int { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3 };
+enum class EventReason : int { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 };
 
-// Events of the last step, pulled after it (no callbacks).
+// Events of the last step, pulled after it (no callbacks). Events raised by remove_body / remove_hand
+// between steps are listed at once and stay listed through the next step.
 struct Event {
   EventType type = EventType::ContactBegin;
   HandId hand;
@@ -128,7 +129,8 @@ class World {
   BodyMotion body_motion(BodyId id) const;
 
   Pose body_pose(BodyId id) const;
-  void set_body_pose(BodyId id, const Pose& pose);  // teleport; velocities are kept
+  // Teleport; velocities are kept. A held body stays held at the new pose (relative poses re-taken).
+  void set_body_pose(BodyId id, const Pose& pose);
   Vec3 body_linear_velocity(BodyId id) const;
   Vec3 body_angular_velocity(BodyId id) const;
   void set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular);

@@ -1,0 +1,664 @@
+// Algorithm 1 end to end: synthetic tracked hands pinch, lift, throw, push and hand over boxes in a World.
+#include "handsim/world.h"
+
+#include "grasp.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+using namespace handsim;
+
+namespace {
+
+constexpr double kDt = 1.0 / 60;
+constexpr double kHalf = 0.02;  // 4 cm cube
+
+Pose rotation(double angle, const Vec3& axis) { return {Vec3::Zero(), Quat(Eigen::AngleAxisd(angle, axis))}; }
+Pose translation(const Vec3& t) { return {t, Quat::Identity()}; }
+
+// A pinch hand: index curled 0.4, the other fingers in a fist, the thumb part way opposed. The closure (m)
+// moves the whole thumb rigidly along the thumb-to-index axis, so closing by 1 mm moves the thumb pad 1 mm.
+struct Pinch {
+  Handedness side = Handedness::Right;
+  HandFrame base;  // palm at the identity
+  Vec3 axis;       // thumb tip -> index tip, palm frame
+  Pose palm_in_box;  // palm pose in the box frame: the index pad rests on the box's +x face, the thumb faces -x
+  double touch = 0;  // closure at which the thumb reaches the -x face (first opposing contacts)
+
+  // The hand holding a box at `box`; `turn` rotates the hand about the box centre (box frame) first.
+  HandFrame frame(const Pose& box, double closure, const Pose& turn = Pose{}) const {
+    return at_palm(box * turn * palm_in_box, closure);
+  }
+  HandFrame at_palm(const Pose& palm, double closure) const {
+    HandFrame f = base;
+    for (int j = kThumbMetacarpal; j <= kThumbTip; ++j) f.joints[j].position += closure * axis;
+    for (JointPose& j : f.joints) {
+      j.position = palm.transform(j.position);
+      j.orientation = (palm.orientation * j.orientation).normalized();
+    }
+    return f;
+  }
+};
+
+std::vector<ParticleContact> static_contacts(const HandModel& model, const HandFrame& f, const Pose& box) {
+  HandState state;
+  pose_hand(model, f, state);
+  std::vector<ParticleContact> out;
+  collide_particles(state.tracked_positions, model.particle_radius, ShapeDef::box(Vec3::Constant(kHalf)), box, out);
+  return out;
+}
+
+bool opposing(const std::vector<ParticleContact>& contacts) {
+  std::vector<Vec3> d;
+  for (const ParticleContact& c : contacts) d.push_back(c.normal);
+  return opposing_contacts(d);
+}
+
+// Places the pinch around a cube at the origin (box frame): the pad axis along +x, fingers pointing down
+// (-y); the index pad touching the +x face by 0.5 mm; `touch` found by bisection on the thumb closure.
+Pinch make_pinch(const HandModel& model) {
+  Pinch p;
+  p.side = model.handedness;
+  HandPoseParams params;
+  params.curl = {0, 0.4, 1, 1, 1};
+  params.thumb_opposition = 0.2;
+  p.base = make_hand_frame(p.side, Pose{}, params);
+  const Vec3 thumb = p.base.joints[kThumbTip].position, index = p.base.joints[kIndexTip].position;
+  p.axis = (index - thumb).normalized();
+  Vec3 down = -Vec3::UnitZ();
+  down = (down - down.dot(p.axis) * p.axis).normalized();
+  Mat3 from, to;
+  from << p.axis, down, p.axis.cross(down);
+  to << Vec3::UnitX(), -Vec3::UnitY(), Vec3::UnitX().cross(-Vec3::UnitY());
+  const Quat q = Quat(to * from.transpose()).normalized();
+  auto at_shift = [&](double s) { return Pose{Vec3(s, 0, 0) - q * (0.5 * (thumb + index)), q}; };
+  const double open = -0.08;
+  double lo = -0.05, hi = 0.05;  // shift along +x that just frees the index
+  for (int k = 0; k < 60; ++k) {
+    p.palm_in_box = at_shift(0.5 * (lo + hi));
+    (static_contacts(model, p.frame(Pose{}, open), Pose{}).empty() ? hi : lo) = 0.5 * (lo + hi);
+  }
+  p.palm_in_box = at_shift(hi - 0.0005);
+  lo = open, hi = 0.05;
+  for (int k = 0; k < 60; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (opposing(static_contacts(model, p.frame(Pose{}, mid), Pose{})) ? hi : lo) = mid;
+  }
+  p.touch = hi;
+  return p;
+}
+
+BodyDef cube(const Vec3& centre) {
+  BodyDef def;
+  def.shape = ShapeDef::box(Vec3::Constant(kHalf));
+  def.mass = 0.1;
+  def.pose.position = centre;
+  return def;
+}
+
+int count(const std::vector<Event>& events, EventType type) {
+  int n = 0;
+  for (const Event& e : events) n += e.type == type;
+  return n;
+}
+
+double smoothstep(double t) { return t * t * (3 - 2 * t); }
+
+// Signed distance of a point to the cube at `box` (negative inside).
+double cube_distance(const Pose& box, const Vec3& x) {
+  const Vec3 q = box.inverse_transform(x).cwiseAbs() - Vec3::Constant(kHalf);
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+void expect_pose_near(const Pose& a, const Pose& b, double tol, const std::string& what) {
+  EXPECT_LE((a.position - b.position).norm(), tol) << what;
+  EXPECT_LE(a.orientation.angularDistance(b.orientation), tol) << what;
+}
+
+// One right hand over a 4 cm, 100 g cube resting on the ground; every event of every step is kept.
+struct Scene {
+  World world;
+  HandId hand;
+  BodyId box;
+  Pinch pinch;
+  Pose rest;
+  std::vector<Event> log;
+
+  explicit Scene(const WorldDef& def = {}) : world(def) {
+    hand = world.add_hand(HandDef{});
+    box = world.add_body(cube(Vec3(0, kHalf, 0)));
+    for (int i = 0; i < 30; ++i) world.step(kDt);
+    pinch = make_pinch(world.hand_model(hand));
+    rest = world.body_pose(box);
+  }
+  double hold() const { return pinch.touch + 0.003; }
+  double open() const { return pinch.touch - 0.02; }
+
+  void step(const std::vector<HandFrame>& frames) {
+    world.step(kDt, frames);
+    log.insert(log.end(), world.events().begin(), world.events().end());
+  }
+  // Comes down from 10 cm above with the thumb open.
+  void approach() {
+    for (int i = 0; i <= 20; ++i)
+      step({pinch.frame(translation(Vec3(0, 0.1 * (1 - i / 20.0), 0)) * rest, open())});
+  }
+  // Approaches, then closes the thumb to hold() over 15 frames.
+  void grasp() {
+    approach();
+    for (int i = 1; i <= 15; ++i) step({pinch.frame(rest, open() + (hold() - open()) * i / 15.0)});
+  }
+  // Lifts the held cube straight up by `height` over `frames` frames; returns the last cube target.
+  Pose lift(double height, int frames) {
+    Pose target = rest;
+    for (int i = 1; i <= frames; ++i) {
+      target = translation(Vec3(0, height * smoothstep(double(i) / frames), 0)) * rest;
+      step({pinch.frame(target, hold())});
+    }
+    return target;
+  }
+  // Opens the thumb at 2 mm per frame around the box pose `at`, then keeps it open; returns the frame of
+  // the GraspEnd (-1: none).
+  int open_hand(const Pose& at, int frames) {
+    int end = -1;
+    for (int i = 1; i <= frames; ++i) {
+      step({pinch.frame(at, std::max(open(), hold() - 0.002 * i))});
+      if (count(world.events(), EventType::GraspEnd) > 0 && end < 0) end = i;
+    }
+    return end;
+  }
+};
+
+}  // namespace
+
+// The synthetic pinch closes on the cube: one GraspBegin naming the hand and the cube, the cube kinematic,
+// and the stored relative pose is the palm-to-cube transform of the grasp frame.
+TEST(Step, PinchGraspsTheCube) {
+  Scene s;
+  s.grasp();
+  ASSERT_EQ(count(s.log, EventType::GraspBegin), 1);
+  for (const Event& e : s.log) {
+    EXPECT_EQ(e.hand, s.hand);
+    EXPECT_EQ(e.body, s.box);
+  }
+  const GraspInfo g = s.world.body_grasp(s.box);
+  EXPECT_TRUE(g.grasped);
+  EXPECT_EQ(g.primary, s.hand);
+  EXPECT_TRUE(g.secondary.is_null());
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Kinematic);
+  expect_pose_near(s.world.hand_palm_pose(s.hand) * g.primary_relative, s.world.body_pose(s.box), 1e-12,
+                   "relative pose");
+  // Grabbing did not shove the cube: it is within 2 mm of where it rested.
+  EXPECT_LT((s.world.body_pose(s.box).position - s.rest.position).norm(), 0.002);
+}
+
+// Lift 30 cm and turn 90 degrees about the vertical over 1 s: the cube is palm * T_rel every frame, to 1e-9.
+// Opening the thumb releases it (Released), it becomes dynamic and falls back to the ground.
+TEST(Step, PinchLiftTurnAndRelease) {
+  Scene s;
+  s.grasp();
+  ASSERT_TRUE(s.world.body_grasp(s.box).grasped);
+  const Pose rel = s.world.body_grasp(s.box).primary_relative;
+  Pose target;
+  for (int i = 1; i <= 60; ++i) {
+    const double t = smoothstep(i / 60.0);
+    target = translation(Vec3(0, 0.3 * t, 0)) * s.rest * rotation(M_PI / 2 * t, Vec3::UnitY());
+    s.step({s.pinch.frame(target, s.hold())});
+    const Pose palm = s.world.hand_palm_pose(s.hand);
+    expect_pose_near(s.world.body_pose(s.box), palm * rel, 1e-9, "frame " + std::to_string(i));
+    ASSERT_TRUE(s.world.body_grasp(s.box).grasped) << "frame " << i;
+  }
+  const Pose lifted = s.world.body_pose(s.box);
+  EXPECT_NEAR(lifted.position.y() - s.rest.position.y(), 0.3, 0.003);
+  EXPECT_NEAR(lifted.orientation.angularDistance(s.rest.orientation), M_PI / 2, 0.01);
+  EXPECT_EQ(count(s.log, EventType::GraspEnd), 0);
+
+  const int end = s.open_hand(target, 20);
+  ASSERT_GT(end, 0) << "opening the thumb did not release the cube";
+  int ends = 0;
+  for (const Event& ev : s.log)
+    if (ev.type == EventType::GraspEnd) {
+      ++ends;
+      EXPECT_EQ(ev.reason, EventReason::Released);
+      EXPECT_EQ(ev.hand, s.hand);
+      EXPECT_EQ(ev.body, s.box);
+    }
+  EXPECT_EQ(ends, 1);
+  EXPECT_FALSE(s.world.body_grasp(s.box).grasped);
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+  // Free fall from ~32 cm takes ~0.26 s; after 1.5 s it rests on the ground, flat.
+  for (int i = 0; i < 90; ++i) s.step({s.pinch.frame(target, s.open())});
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
+  EXPECT_EQ(count(s.log, EventType::GraspBegin), 1);
+}
+
+// Thrown: the hand moves at a constant linear velocity v (of the palm) and angular velocity w while the thumb
+// opens. The released cube leaves with the velocity of its point on the hand, v + w x (x - palm), and with w,
+// to 5 %. In the release frame gravity has acted for one dt on the now free cube; that is taken out.
+void expect_thrown_with_hand_velocity(const Vec3& v, const Vec3& w) {
+  Scene s;
+  s.grasp();
+  const Pose lifted = s.lift(0.25, 30);
+  const Pose palm0 = lifted * s.pinch.palm_in_box;
+  const Pose rel = s.world.body_grasp(s.box).primary_relative;
+  int released = -1;
+  Pose palm;
+  for (int i = 1; i <= 30 && released < 0; ++i) {
+    const double t = i * kDt;
+    palm = Pose{palm0.position + v * t, (Quat(Eigen::AngleAxisd(w.norm() * t, w.normalized())) * palm0.orientation)};
+    if (w.isZero()) palm.orientation = palm0.orientation;
+    const double closure = i <= 6 ? s.hold() : std::max(s.open(), s.hold() - 0.002 * (i - 6));
+    s.step({s.pinch.at_palm(palm, closure)});
+    if (count(s.world.events(), EventType::GraspEnd) == 1) released = i;
+  }
+  ASSERT_GT(released, 0) << "never released";
+  const Vec3 x = (palm * rel).position;
+  const Vec3 expected = v + w.cross(x - palm.position);
+  const Vec3 linear = s.world.body_linear_velocity(s.box) - s.world.def().gravity * kDt;
+  EXPECT_LE((linear - expected).norm(), 0.05 * expected.norm()) << linear.transpose() << " vs " << expected.transpose();
+  EXPECT_LE((s.world.body_angular_velocity(s.box) - w).norm(), 0.05 * std::max(w.norm(), 1e-9))
+      << s.world.body_angular_velocity(s.box).transpose();
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
+
+TEST(Step, ThrownLinearlyLeavesWithTheHandVelocity) {
+  expect_thrown_with_hand_velocity(Vec3(1.5, 0.8, -0.5), Vec3::Zero());
+}
+
+TEST(Step, ThrownWithSpinLeavesWithThePointVelocityAndSpin) {
+  expect_thrown_with_hand_velocity(Vec3(1.2, 0.5, 0.0), Vec3(0.5, 3.0, -1.0));
+}
+
+// A flat hand, palm facing +x, sweeps through the cube's place at 0.25 m/s for 1.2 s: the cube slides ahead
+// of it along the ground, is never grasped, and never gets into the hand: the tracked particle spheres overlap
+// it by less than their radius (the skin itself never enters), and the particles drawn (deformed) are never
+// inside it.
+TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
+  World world;
+  HandId hand = world.add_hand(HandDef{});
+  BodyId box = world.add_body(cube(Vec3(0, kHalf, 0)));
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  const double speed = 0.25, r = world.hand_model(hand).particle_radius;
+  double deepest = 0, deepest_drawn = 0;
+  int grasps = 0, touching = 0;
+  for (int i = 0; i < 72; ++i) {
+    const Pose palm{Vec3(-0.09 + speed * i * kDt, kHalf, 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
+    const Pose before = world.body_pose(box);  // what this frame's contact pass sees
+    world.step(kDt, {make_hand_frame(Handedness::Right, palm)});
+    grasps += count(world.events(), EventType::GraspBegin);
+    touching += world.body_contact_count(box, hand) > 0;
+    const Eigen::Matrix3Xd& tracked = world.hand_particles(hand, false);
+    const Eigen::Matrix3Xd& drawn = world.hand_particles(hand, true);
+    for (Eigen::Index p = 0; p < tracked.cols(); ++p) {
+      deepest = std::max(deepest, r - cube_distance(before, tracked.col(p)));
+      deepest_drawn = std::max(deepest_drawn, -cube_distance(before, drawn.col(p)));
+    }
+  }
+  std::printf("push: deepest tracked penetration %.2f mm (r = %.2f mm), drawn %.3g m, touching frames %d, x %.3f\n",
+              deepest * 1e3, r * 1e3, deepest_drawn, touching, world.body_pose(box).position.x());
+  EXPECT_EQ(grasps, 0);
+  EXPECT_GT(touching, 40);
+  const Pose end = world.body_pose(box);
+  EXPECT_GT(end.position.x(), 0.15);  // it went along
+  EXPECT_NEAR(end.position.y(), kHalf, 2e-3);
+  EXPECT_LT(std::abs(end.position.z()), 0.01);
+  EXPECT_LT(std::acos(std::min(1.0, (end.orientation * Vec3::UnitY()).y())), 0.05);  // still upright
+  EXPECT_LT(deepest, r);  // the skin (particle centres) never enters the cube
+  EXPECT_LE(deepest_drawn, 1e-9);
+}
+
+// Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
+// one grasp begins and ends. Without hysteresis (1 frame each way, no release margin) the same input flickers,
+// which shows that the count would catch it.
+int dithering_grasp_events(const GraspSettings& grasp) {
+  WorldDef def;
+  def.grasp = grasp;
+  Scene s(def);
+  s.approach();
+  for (int i = 0; i < 120; ++i) s.step({s.pinch.frame(s.rest, s.pinch.touch + (i % 2 ? 0.001 : -0.001))});
+  return count(s.log, EventType::GraspBegin) + count(s.log, EventType::GraspEnd);
+}
+
+TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
+  EXPECT_LE(dithering_grasp_events(GraspSettings{}), 2);
+  GraspSettings none;
+  none.frames_to_grasp = 1;
+  none.frames_to_release = 1;
+  none.release_distance = 0;
+  EXPECT_GE(dithering_grasp_events(none), 40);
+}
+
+// Two hands: the left hand pinches the cube the right hand holds (from below, across the other pair of
+// faces) and becomes secondary. It turns about its pinch axis: it slips (the cube stays with the primary).
+// The right hand opens: the left takes over without a jump, and the cube then follows the left hand.
+TEST(Step, SecondHandSlipsThenTakesOverWithoutAJump) {
+  Scene s;
+  const HandId left = s.world.add_hand(HandDef{Handedness::Left});
+  const Pinch lp = make_pinch(s.world.hand_model(left));
+  s.grasp();
+  const Pose lifted = s.lift(0.2, 30);
+  const HandFrame right_hold = s.pinch.frame(lifted, s.hold());
+  const Pose box = s.world.body_pose(s.box);
+  const Pose below = rotation(M_PI / 2, Vec3::UnitY()) * rotation(M_PI, Vec3::UnitZ());
+  auto left_at = [&](double closure, const Pose& turn) { return lp.frame(box, closure, turn * below); };
+  for (int i = 0; i <= 20; ++i)
+    s.step({right_hold, left_at(lp.touch - 0.02, translation(Vec3(0, -0.1 * (1 - i / 20.0), 0)))});
+  for (int i = 1; i <= 15; ++i) s.step({right_hold, left_at(lp.touch - 0.02 + 0.023 * i / 15.0, Pose{})});
+  GraspInfo g = s.world.body_grasp(s.box);
+  ASSERT_EQ(g.primary, s.hand);
+  ASSERT_EQ(g.secondary, left);
+  EXPECT_EQ(count(s.log, EventType::GraspBegin), 2);
+  const Pose rel = g.primary_relative;
+  // Slip: the left hand turns 20 degrees about its pinch axis (the cube's z axis); the cube does not move.
+  Pose turn;
+  for (int i = 1; i <= 20; ++i) {
+    turn = rotation(0.35 * i / 20.0, Vec3::UnitZ());
+    s.step({right_hold, left_at(lp.touch + 0.003, turn)});
+    expect_pose_near(s.world.body_pose(s.box), s.world.hand_palm_pose(s.hand) * rel, 1e-9, "slip " + std::to_string(i));
+    ASSERT_EQ(s.world.body_grasp(s.box).secondary, left) << "slip frame " << i;
+  }
+  expect_pose_near(s.world.body_pose(s.box), box, 1e-9, "after the slip");
+  // The right hand opens its thumb; the left hand stays where it is.
+  const HandFrame left_hold = left_at(lp.touch + 0.003, turn);
+  int handover = -1;
+  for (int i = 1; i <= 15 && handover < 0; ++i) {
+    s.step({s.pinch.frame(lifted, s.hold() - 0.002 * i), left_hold});
+    expect_pose_near(s.world.body_pose(s.box), box, 1e-9, "release frame " + std::to_string(i));
+    if (count(s.world.events(), EventType::GraspEnd) > 0) handover = i;
+  }
+  ASSERT_GT(handover, 0);
+  const Event& end = s.log.back();
+  EXPECT_EQ(end.type, EventType::GraspEnd);
+  EXPECT_EQ(end.hand, s.hand);
+  EXPECT_EQ(end.reason, EventReason::Released);
+  g = s.world.body_grasp(s.box);
+  ASSERT_TRUE(g.grasped);
+  EXPECT_EQ(g.primary, left);
+  EXPECT_TRUE(g.secondary.is_null());
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Kinematic);
+  const Pose left_rel = g.primary_relative;
+  expect_pose_near(s.world.hand_palm_pose(left) * left_rel, box, 1e-12, "handover");
+  // Now the cube follows the left hand: up 10 cm and a quarter turn about x.
+  const HandFrame right_open = s.pinch.frame(lifted, s.open());
+  for (int i = 1; i <= 30; ++i) {
+    const double t = smoothstep(i / 30.0);
+    const Pose moved = translation(Vec3(0, 0.1 * t, 0)) * box * rotation(M_PI / 2 * t, Vec3::UnitX());
+    s.step({right_open, lp.frame(moved, lp.touch + 0.003, rotation(M_PI / 2 * t, Vec3::UnitX()).inverse() * turn * below)});
+    expect_pose_near(s.world.body_pose(s.box), s.world.hand_palm_pose(left) * left_rel, 1e-9, "follow " + std::to_string(i));
+    ASSERT_TRUE(s.world.body_grasp(s.box).grasped) << "follow frame " << i;
+  }
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y() - box.position.y(), 0.1, 0.005);
+}
+
+// Tracking loss: 5 invalid frames keep the grasp with the cube exactly where it was; 60 frames (1 s, beyond
+// the 0.2 s grace) release it at rest (TrackingLost) on the first frame past the grace, and it falls.
+TEST(Step, TrackingLossShortKeepsLongReleasesAtRest) {
+  Scene s;
+  s.grasp();
+  const Pose lifted = s.lift(0.2, 30);
+  const HandFrame hold = s.pinch.frame(lifted, s.hold());
+  const Pose held = s.world.body_pose(s.box);
+  HandFrame lost = hold;
+  lost.joints[kPalm].valid = false;
+  lost.joints[kPalm].position.x() = std::nan("");  // an invalid joint may hold anything
+  for (int i = 0; i < 5; ++i) {
+    s.step({lost});
+    EXPECT_FALSE(s.world.hand_tracked(s.hand));
+    EXPECT_TRUE(s.world.body_grasp(s.box).grasped) << i;
+    expect_pose_near(s.world.body_pose(s.box), held, 0.0, "lost frame " + std::to_string(i));
+  }
+  for (int i = 0; i < 10; ++i) s.step({hold});
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+  EXPECT_EQ(count(s.log, EventType::GraspEnd), 0);
+  int released = -1;
+  for (int i = 0; i < 60; ++i) {
+    s.step({});  // no frame at all: untracked too
+    if (count(s.world.events(), EventType::GraspEnd) > 0) {
+      released = i;
+      const Event& e = s.log.back();
+      EXPECT_EQ(e.reason, EventReason::TrackingLost);
+      EXPECT_EQ(e.hand, s.hand);
+      EXPECT_EQ(e.body, s.box);
+      // Released at rest: one frame of gravity since.
+      EXPECT_LE((s.world.body_linear_velocity(s.box) - s.world.def().gravity * kDt).norm(), 1e-9);
+      EXPECT_LE(s.world.body_angular_velocity(s.box).norm(), 1e-9);
+    }
+  }
+  EXPECT_EQ(released, 12);  // untracked for 13/60 s = 0.217 s > 0.2 s
+  EXPECT_EQ(count(s.log, EventType::GraspEnd), 1);
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
+}
+
+// Contact events name the hand that touched and the body it touched, and nothing else.
+TEST(Step, ContactEventsNameTheRightHandAndBody) {
+  World world;
+  const HandId right = world.add_hand(HandDef{Handedness::Right});
+  const HandId left = world.add_hand(HandDef{Handedness::Left});
+  const BodyId a = world.add_body(cube(Vec3(0, kHalf, 0)));
+  const BodyId b = world.add_body(cube(Vec3(0.4, kHalf, 0)));
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  // A pointing hand (index straight, the rest in a fist) pokes a cube's top from above and goes back up; the
+  // other hand stays far away. (A flat hand pressed deep into a box that cannot move away is grasped: see
+  // docs/grasp.md, limitations.)
+  auto press = [](Handedness side, const Vec3& over, double height) {
+    HandPoseParams point;
+    point.curl = {1, 0, 1, 1, 1};
+    const Pose down{Vec3::Zero(), Quat(Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitX()))};  // fingers along -y
+    HandFrame f = make_hand_frame(side, Pose{}, point);
+    const Vec3 tip = f.joints[kIndexTip].position;
+    return make_hand_frame(side, translation(over + Vec3(0, 2 * kHalf + height, 0)) * down *
+                                     translation(-tip), point);
+  };
+  std::vector<Event> log;
+  for (int i = 0; i < 40; ++i) {
+    const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);  // the tip joint down to 1 cm above, back up
+    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), y), press(Handedness::Left, Vec3(-0.5, 0, 0), 0.3)});
+    log.insert(log.end(), world.events().begin(), world.events().end());
+  }
+  for (int i = 0; i < 40; ++i) {
+    const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);
+    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), 0.3), press(Handedness::Left, Vec3(0, 0, 0), y)});
+    log.insert(log.end(), world.events().begin(), world.events().end());
+  }
+  ASSERT_EQ(log.size(), 4u);
+  EXPECT_EQ(log[0].type, EventType::ContactBegin);
+  EXPECT_EQ(log[1].type, EventType::ContactEnd);
+  EXPECT_EQ(log[2].type, EventType::ContactBegin);
+  EXPECT_EQ(log[3].type, EventType::ContactEnd);
+  EXPECT_TRUE(log[0].hand == right && log[1].hand == right && log[0].body == b && log[1].body == b);
+  EXPECT_TRUE(log[2].hand == left && log[3].hand == left && log[2].body == a && log[3].body == a);
+}
+
+// Bad frames and time steps: a handsim::Error whose argument names the culprit, and nothing changes.
+TEST(Step, BadInputIsRejectedAndLeavesTheWorldUnchanged) {
+  Scene s;
+  s.grasp();
+  const HandFrame good = s.pinch.frame(s.rest, s.hold());
+  auto edited = [&](auto edit) {
+    HandFrame f = good;
+    edit(f);
+    return std::vector<HandFrame>{f};
+  };
+  struct Case {
+    const char* name;
+    std::vector<HandFrame> frames;
+    double dt;
+    const char* argument;
+  };
+  const double nan = std::nan("");
+  const std::vector<Case> cases = {
+      {"more frames than hands", {good, good}, kDt, "hands"},
+      {"NaN in a valid joint", edited([&](HandFrame& f) { f.joints[7].position.y() = nan; }), kDt,
+       "hands[0].joints[7].position"},
+      {"non-unit quaternion", edited([](HandFrame& f) { f.joints[3].orientation = Quat(0.7, 0, 0, 0); }), kDt,
+       "hands[0].joints[3].orientation"},
+      {"wrong handedness", edited([](HandFrame& f) { f.handedness = Handedness::Left; }), kDt,
+       "hands[0].handedness"},
+      {"dt zero", {good}, 0.0, "dt"},
+      {"dt negative", {good}, -kDt, "dt"},
+      {"dt NaN", {good}, nan, "dt"},
+  };
+  const uint64_t hash = s.world.state_hash();
+  const Pose palm = s.world.hand_palm_pose(s.hand);
+  const size_t events = s.world.events().size();
+  for (const Case& c : cases) {
+    try {
+      s.world.step(c.dt, c.frames);
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), Status::InvalidArgument) << c.name;
+      EXPECT_EQ(e.argument(), c.argument) << c.name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind(c.argument, 0), 0u) << c.name << ": " << e.what();
+    }
+    EXPECT_EQ(s.world.state_hash(), hash) << c.name;
+    EXPECT_EQ(s.world.events().size(), events) << c.name;
+    expect_pose_near(s.world.hand_palm_pose(s.hand), palm, 0.0, c.name);
+  }
+  // NaN in an invalid joint is legal: that joint is not tracked.
+  s.world.step(kDt, edited([&](HandFrame& f) {
+    f.joints[9].valid = false;
+    f.joints[9].position.x() = nan;
+  }));
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+}
+
+// Removing a held body: GraspEnd (BodyRemoved) and ContactEnd name the hand and the old id, they are still
+// listed after the next step, and no later event or query names the old id.
+TEST(Step, RemovingAHeldBodyEndsItsGraspAndContacts) {
+  Scene s;
+  s.grasp();
+  const HandFrame hold = s.pinch.frame(s.rest, s.hold());
+  const BodyId old = s.box;
+  s.world.remove_body(old);
+  auto check = [&](const std::vector<Event>& ev) {
+    ASSERT_EQ(ev.size(), 2u);
+    EXPECT_EQ(ev[0].type, EventType::GraspEnd);
+    EXPECT_EQ(ev[0].reason, EventReason::BodyRemoved);
+    EXPECT_EQ(ev[1].type, EventType::ContactEnd);
+    for (const Event& e : ev) EXPECT_TRUE(e.hand == s.hand && e.body == old);
+  };
+  check(s.world.events());
+  s.world.step(kDt, {hold});
+  check(s.world.events());  // listed once more, for a caller that reads events after each step
+  s.world.step(kDt, {hold});
+  EXPECT_TRUE(s.world.events().empty());
+  // A new body in the same slot is a stranger to the hand.
+  const BodyId next = s.world.add_body(cube(Vec3(0.5, kHalf, 0)));
+  EXPECT_EQ(next.index, old.index);
+  for (int i = 0; i < 10; ++i) s.world.step(kDt, {hold});
+  EXPECT_TRUE(s.world.events().empty());
+  EXPECT_FALSE(s.world.body_grasp(next).grasped);
+  EXPECT_EQ(s.world.body_motion(next), BodyMotion::Dynamic);
+  EXPECT_THROW(s.world.body_contact_count(old, s.hand), Error);
+}
+
+// Removing the holding hand: the cube is let go at rest (HandRemoved) and falls; the world has no hand left.
+TEST(Step, RemovingTheHoldingHandDropsTheBodyAtRest) {
+  Scene s;
+  s.grasp();
+  s.lift(0.1, 20);
+  s.world.remove_hand(s.hand);
+  ASSERT_EQ(s.world.events().size(), 2u);
+  EXPECT_EQ(s.world.events()[0].type, EventType::GraspEnd);
+  EXPECT_EQ(s.world.events()[0].reason, EventReason::HandRemoved);
+  EXPECT_EQ(s.world.events()[1].type, EventType::ContactEnd);
+  EXPECT_FALSE(s.world.body_grasp(s.box).grasped);
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+  EXPECT_EQ(s.world.body_linear_velocity(s.box).norm(), 0.0);
+  EXPECT_TRUE(s.world.hands().empty());
+  for (int i = 0; i < 60; ++i) s.world.step(kDt);
+  EXPECT_NEAR(s.world.body_pose(s.box).position.y(), kHalf, 1e-3);
+}
+
+// Teleporting a held body keeps it held at the new pose: the hand's relative pose is re-taken. Moved within
+// the fingers' reach it stays held; moved out of the hand it is held there until the release hysteresis drops it.
+TEST(Step, SetBodyPoseOnAHeldBodyKeepsItHeldThere) {
+  Scene s;
+  s.grasp();
+  const HandFrame hold = s.pinch.frame(s.rest, s.hold());
+  const Pose nudged = translation(Vec3(0.001, 0.001, 0)) * s.world.body_pose(s.box) * rotation(0.02, Vec3::UnitX());
+  s.world.set_body_pose(s.box, nudged);
+  for (int i = 0; i < 30; ++i) {
+    s.step({hold});
+    expect_pose_near(s.world.body_pose(s.box), nudged, 1e-12, "nudged, frame " + std::to_string(i));
+  }
+  expect_pose_near(s.world.hand_palm_pose(s.hand) * s.world.body_grasp(s.box).primary_relative, nudged, 1e-12, "rel");
+  const Pose away = translation(Vec3(0, 0.1, 0)) * nudged;
+  s.world.set_body_pose(s.box, away);
+  const int m = s.world.def().grasp.frames_to_release;
+  for (int i = 1; i < m; ++i) {
+    s.step({hold});
+    expect_pose_near(s.world.body_pose(s.box), away, 1e-12, "away, frame " + std::to_string(i));
+  }
+  s.step({hold});
+  ASSERT_EQ(count(s.world.events(), EventType::GraspEnd), 1);
+  EXPECT_EQ(s.log.back().reason, EventReason::Released);
+  EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Measurement behind the hysteresis defaults (docs/grasp.md). Not a test; run it with
+//   ./build/dev/tests/cpp/test_step --gtest_also_run_disabled_tests --gtest_filter='*MeasureGraspHysteresis'
+
+// Deterministic N(0, 1) samples (Box-Muller on mt19937, whose output is specified exactly).
+struct Gauss {
+  std::mt19937 rng{1};
+  double operator()() {
+    const double u1 = (rng() + 0.5) / 4294967296.0, u2 = (rng() + 0.5) / 4294967296.0;
+    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+  }
+};
+
+struct HysteresisRow {
+  int dither_events = 0;   // grasp begin + end while the thumb dithers +-1 mm around first touch for 2 s
+  int noise_releases = 0;  // GraspEnd while holding for 5 s at touch + grip with `sigma` (m) of thumb jitter
+  int grasp_frames = -1;   // frames from the thumb crossing first touch (closing at 0.5 mm/frame) to GraspBegin
+  int release_frames = -1; // frames from starting to open (2 mm/frame) to GraspEnd
+};
+
+HysteresisRow measure_hysteresis(const GraspSettings& g, double sigma, double grip) {
+  WorldDef def;
+  def.grasp = g;
+  HysteresisRow row;
+  row.dither_events = dithering_grasp_events(g);
+  Scene s(def);
+  s.approach();
+  const double start = s.pinch.touch - 0.005;
+  for (int i = 0; i <= 40 && row.grasp_frames < 0; ++i) {
+    const double closure = start + 0.0005 * i;
+    s.step({s.pinch.frame(s.rest, closure)});
+    if (count(s.world.events(), EventType::GraspBegin) > 0) row.grasp_frames = int(std::lround((closure - s.pinch.touch) / 0.0005));
+  }
+  for (int i = 0; i < 10; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+  const Pose held = s.world.body_pose(s.box);
+  Gauss noise;
+  for (int i = 0; i < 300 && s.world.body_grasp(s.box).grasped; ++i) {
+    s.step({s.pinch.frame(held, s.pinch.touch + grip + sigma * noise())});
+    row.noise_releases += count(s.world.events(), EventType::GraspEnd);
+  }
+  if (!s.world.body_grasp(s.box).grasped) return row;
+  row.release_frames = s.open_hand(s.world.body_pose(s.box), 30);
+  return row;
+}
+
+TEST(Step, DISABLED_MeasureGraspHysteresis) {
+  std::printf("frames_to_grasp frames_to_release release_distance_mm | dither_events releases(firm,1.5mm) "
+              "releases(firm,3mm) releases(light,1.5mm) grasp_latency_frames release_latency_frames\n");
+  auto row = [](int k, int m, double d) {
+    GraspSettings g;
+    g.frames_to_grasp = k;
+    g.frames_to_release = m;
+    g.release_distance = d;
+    const HysteresisRow r = measure_hysteresis(g, 0.0015, 0.003), r3 = measure_hysteresis(g, 0.003, 0.003),
+                        light = measure_hysteresis(g, 0.0015, 0.0005);
+    std::printf("%d %d %.1f | %d %d %d %d %d %d\n", k, m, d * 1e3, r.dither_events, r.noise_releases,
+                r3.noise_releases, light.noise_releases, r.grasp_frames, r.release_frames);
+  };
+  for (int k : {1, 2, 3, 4}) row(k, 3, 0.005);
+  for (int m : {1, 2, 5}) row(2, m, 0.005);
+  for (double d : {0.0, 0.0025, 0.008}) row(2, 3, d);
+  row(1, 1, 0.0);
+}
