@@ -565,6 +565,56 @@ def _machine():
     return f"{cpu}, Python {platform.python_version()}, handsim {handsim.__version__}"
 
 
+# The report's fixed prose; everything with a number in it is written from the result below.
+MODES_TEXT = """\
+The micro-simulator of Kim & Park (Sec. III-A, eq. 4) finds the hinge angle whose child pose best matches
+the pose the hand gave the child, over the child's model vertices, within the limits. handsim has three
+solver modes, chosen per joint (`HingeDef.solver`):
+
+- **`exact`** (default): the cost is `A - 2 (alpha cos(theta) + beta sin(theta))`, so the optimum is
+  `atan2(beta, alpha)`. alpha and beta come from the child's vertex moments (weight sum, first and second
+  moments), precomputed once per body about the **pivot**, not the body origin, so a body far from its
+  origin keeps its digits. Each solve is O(1), independent of the vertex count. Guards: the result is
+  unwrapped to the turn nearest the previous angle; when no turn of the optimum is inside the limits, the
+  limit with the smaller cost wins (not a naive clamp, which can pick the far side of the cost maximum);
+  when the vertices' RMS distance from the axis is below `min_lever` (1e-5 m) the angle is unobservable
+  and the previous angle is kept (`DEGENERATE`).
+- **`lm_ceres`**: the paper's method, Ceres Levenberg-Marquardt over all 3N vertex residuals, at most
+  `WorldDef.joint_max_iterations` (the paper's 10) iterations, started from the previous angle, bounds
+  as Ceres parameter bounds. O(N) per iteration.
+- **`lm`**: the same Levenberg-Marquardt written with Eigen, for builds without Ceres; same residuals,
+  same iteration cap, a projected 1-D step for the limits."""
+
+CLASSES_INTRO_TEXT = """\
+The child is a lid-like body (18 x 1.5 x 13.5 cm, the jewelry box's lid) with N seeded random vertices
+inside it, hinged along its back bottom edge (axis -X, limits 0..90 deg). Each class draws a parent pose
+and, per pose, an angle inside the limits; the hand's pose for the child ("simulated") is the lid at that
+angle moved by the class's offset (translation and rotation about the lid's centroid, random directions),
+and `previous` is that angle. Every solver solves the same poses."""
+
+REFERENCE_TEXT = """\
+Reference: the same optimum computed in mpmath with 50 significant digits from the double inputs: the
+vertex moments about the pivot summed exactly, rotations from the normalized quaternions, then
+`atan2(beta, alpha)`, the turn nearest `previous` inside the limits, else the limit of smaller cost, and
+`previous` when the RMS lever is below `min_lever`. Errors are |solver - reference|; 0 is drawn at 1e-18
+on the log plot."""
+
+LIMITATIONS_TEXT = """\
+- Times are single-thread wall times on the machine above, of the C++ functions called in a C++ loop
+  (`handsim._core.solvers.time_hinge_solves`); every mode's time includes the validation of its inputs
+  and the two clock reads each solve makes for `JointSolveResult.seconds`, which is a visible share of
+  the exact mode's sub-microsecond time.
+- LM modes start from `previous`, as in the world; their accuracy depends on that start and on the
+  iteration cap. The errors above are for the paper's 10 iterations.
+- The reference shares the closed form's algebra (the optimum of a sinusoid), not its arithmetic; the C++
+  tests (`tests/cpp/test_joint_solvers.cpp`) check the closed form against a per-vertex long-double
+  search, and `tests/python/test_joints.py` checks that the reference's cost derivative vanishes.
+- Only the hinge is benchmarked here; the slider's exact mode is a clamped mean (exact by construction),
+  the ball joint has only the exact (Kabsch) mode.
+- The group scenario is one scripted drag with one hand shape; the soft numbers depend on the drag speed,
+  the lid's mass and Bullet's constraint settings (defaults), and are a measurement of this scene only."""
+
+
 def report_markdown(result, command, figures):
     rows = result["solves"]
     names = solver_list()
@@ -596,23 +646,7 @@ def report_markdown(result, command, figures):
             " upper bounds and ratios as approximate." if None not in load else "")
     w(f"*on {result.get('machine', _machine())}, single thread. Do not edit by hand: rerun the command.*{busy}")
     w("")
-    w("The micro-simulator of Kim & Park (Sec. III-A, eq. 4) finds the hinge angle whose child pose best matches")
-    w("the pose the hand gave the child, over the child's model vertices, within the limits. handsim has three")
-    w("solver modes, chosen per joint (`HingeDef.solver`):")
-    w("")
-    w("- **`exact`** (default): the cost is `A - 2 (alpha cos(theta) + beta sin(theta))`, so the optimum is")
-    w("  `atan2(beta, alpha)`. alpha and beta come from the child's vertex moments (weight sum, first and second")
-    w("  moments), precomputed once per body about the **pivot**, not the body origin, so a body far from its")
-    w("  origin keeps its digits. Each solve is O(1), independent of the vertex count. Guards: the result is")
-    w("  unwrapped to the turn nearest the previous angle; when no turn of the optimum is inside the limits, the")
-    w("  limit with the smaller cost wins (not a naive clamp, which can pick the far side of the cost maximum);")
-    w("  when the vertices' RMS distance from the axis is below `min_lever` (1e-5 m) the angle is unobservable")
-    w("  and the previous angle is kept (`DEGENERATE`).")
-    w("- **`lm_ceres`**: the paper's method, Ceres Levenberg-Marquardt over all 3N vertex residuals, at most")
-    w("  `WorldDef.joint_max_iterations` (the paper's 10) iterations, started from the previous angle, bounds")
-    w("  as Ceres parameter bounds. O(N) per iteration.")
-    w("- **`lm`**: the same Levenberg-Marquardt written with Eigen, for builds without Ceres; same residuals,")
-    w("  same iteration cap, a projected 1-D step for the limits.")
+    w(MODES_TEXT)
     w("")
     w("## Headline")
     w("")
@@ -665,19 +699,11 @@ def report_markdown(result, command, figures):
     w("")
     w("## Pose classes")
     w("")
-    w("The child is a lid-like body (18 x 1.5 x 13.5 cm, the jewelry box's lid) with N seeded random vertices")
-    w("inside it, hinged along its back bottom edge (axis -X, limits 0..90 deg). Each class draws a parent pose")
-    w("and, per pose, an angle inside the limits; the hand's pose for the child (\"simulated\") is the lid at that")
-    w("angle moved by the class's offset (translation and rotation about the lid's centroid, random directions),")
-    w("and `previous` is that angle. Every solver solves the same poses.")
+    w(CLASSES_INTRO_TEXT)
     w("")
     w(markdown_table(["class", "what"], [[c, spec[4]] for c, spec in CLASSES.items()]))
     w("")
-    w("Reference: the same optimum computed in mpmath with 50 significant digits from the double inputs: the")
-    w("vertex moments about the pivot summed exactly, rotations from the normalized quaternions, then")
-    w("`atan2(beta, alpha)`, the turn nearest `previous` inside the limits, else the limit of smaller cost, and")
-    w("`previous` when the RMS lever is below `min_lever`. Errors are |solver - reference|; 0 is drawn at 1e-18")
-    w("on the log plot.")
+    w(REFERENCE_TEXT)
     guard = result["near_axis_default_guard"]
     w("")
     w("The near-axis class runs with `min_lever = 1e-7` so that the solvers solve it at all; with the default")
@@ -746,19 +772,7 @@ def report_markdown(result, command, figures):
     w("")
     w("## Limitations")
     w("")
-    w("- Times are single-thread wall times on the machine above, of the C++ functions called in a C++ loop")
-    w("  (`handsim._core.solvers.time_hinge_solves`); every mode's time includes the validation of its inputs")
-    w("  and the two clock reads each solve makes for `JointSolveResult.seconds`, which is a visible share of")
-    w("  the exact mode's sub-microsecond time.")
-    w("- LM modes start from `previous`, as in the world; their accuracy depends on that start and on the")
-    w("  iteration cap. The errors above are for the paper's 10 iterations.")
-    w("- The reference shares the closed form's algebra (the optimum of a sinusoid), not its arithmetic; the C++")
-    w("  tests (`tests/cpp/test_joint_solvers.cpp`) check the closed form against a per-vertex long-double")
-    w("  search, and `tests/python/test_joints.py` checks that the reference's cost derivative vanishes.")
-    w("- Only the hinge is benchmarked here; the slider's exact mode is a clamped mean (exact by construction),")
-    w("  the ball joint has only the exact (Kabsch) mode.")
-    w("- The group scenario is one scripted drag with one hand shape; the soft numbers depend on the drag speed,")
-    w("  the lid's mass and Bullet's constraint settings (defaults), and are a measurement of this scene only.")
+    w(LIMITATIONS_TEXT)
     w("")
     return "\n".join(out)
 
