@@ -1,9 +1,9 @@
 """Full-step cost per scene (issue 11): the lean, scene-driven pipeline against the paper's pipeline.
 
 Scenes, built with the shared builders: "jewelry_box" (build_jewelry_box, the right hand pinching the lid via
-lid_pinch_palm while the angle grows, the left hand beside the base), "free_box" (one hand over one free box on
-the ground, lowering onto it and lifting off), "far_hand" (one hand a metre away from every object) and
-"ten_objects" (ten boxes on the ground, the hand pressing one). Sweeps: "particles_sweep" (free_box with
+lid_pinch_palm while the angle grows, the left hand beside the base), "free_box" (one hand resting on one free box on
+the ground, swaying), "far_hand" (one hand a metre away from every object) and
+"ten_objects" (ten boxes on the ground, the hand resting on one). Sweeps: "particles_sweep" (free_box with
 100 .. 10,000 particles) and "render_sweep" (free_box, 1k .. 100k render vertices, the render mesh read after
 every step).
 
@@ -59,15 +59,15 @@ def _lowest_offset(world, hand, handedness, palm_y=0.5):
 
 
 def _pressing(world, hand, target, frames_total):
-    """Frames of a flat right hand over `target` (x, z of a box top at height top_y): hovering 2 cm above,
-    lowering to 5 mm into the box and lifting off again, a 60-frame cycle."""
+    """Frames of a flat right hand resting on `target` (x, top_y, z of a box top): its lowest particles 3 mm
+    into the box, swaying 1 cm sideways over a 60-frame cycle (the box may end up held and carried)."""
     x, top_y, z = target
     drop = _lowest_offset(world, hand, handsim.Handedness.RIGHT)
 
     def frame(i):
-        gap = 0.02 - 0.025 * 0.5 * (1 - math.cos(2 * math.pi * (i % 60) / 60))  # +2 cm .. -5 mm
+        sway = 0.01 * math.sin(2 * math.pi * (i % 60) / 60)
         # fingers along -Z: put the palm a little behind the box centre so the fingers lie over it
-        palm = [x, top_y + drop + gap, z + 0.04, 0, 0, 0, 1]
+        palm = [x + sway, top_y + drop - 0.003, z + 0.04, 0, 0, 0, 1]
         return [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm)]
     return frame
 
@@ -88,8 +88,7 @@ def build(scene, pipeline, particles=DEFAULT_PARTICLES, render=DEFAULT_RENDER, f
         d = box.definition
         base = world.body_pose(box.base)[:3]
         # the left hand palm down beside the base, on its -X side, fingers reaching towards the base
-        left_palm = [base[0] - d.base_half_extents[0] - 0.05, base[1] + 2 * d.base_half_extents[1] + 0.01,
-                     base[2] + 0.05, 0, 0, 0, 1]
+        left_palm = [base[0] - d.base_half_extents[0] - 0.07, base[1], base[2] + 0.05, 0, 0, 0, 1]
         left_frame = handsim.make_hand_frame(L, left_palm)
 
         def frame(i):
