@@ -332,7 +332,7 @@ class SimulatedUser:
     def _goal(self):
         if self.p.style == "push":
             return math.radians(30)  # tip it past the balance point and follow it down; gravity does the rest
-        return self.p.target_angle if self.p.task == "open" else -math.radians(10)
+        return self.p.target_angle if self.p.task == "open" else math.radians(1)
 
     # --- the state machine ---
     def frames(self) -> List:
