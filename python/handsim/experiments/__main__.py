@@ -33,6 +33,21 @@ def _fmt(x, spec, none="–"):
     return none if x is None else format(x, spec)
 
 
+def _paper_table(rows, paper_header, paper_cell, our_cell):
+    """Markdown rows: one line per task cell, the paper's numbers, then ours per method and threshold."""
+    out = ["| task | " + paper_header + " | " + " | ".join(f"{m} c={c:+.1f}" for m in METHODS for c in THRESHOLDS) + " |",
+           "|---|---|" + "---|" * (len(METHODS) * len(THRESHOLDS))]
+    for task, hands in CELLS:
+        cells = []
+        for m in METHODS:
+            for c in THRESHOLDS:
+                r = next((x for x in rows if x["method"] == m and x["threshold"] == c and x["task"] == task
+                          and x["hands"] == hands), None)
+                cells.append("–" if r is None else our_cell(r))
+        out.append(f"| {task}, {hands} hand{'s' if hands > 1 else ''} | {paper_cell(task)} | " + " | ".join(cells) + " |")
+    return out
+
+
 def report(rows, results, trials, seconds, command, workers) -> str:
     import handsim
     cond_names = {"exact": "hard hinge + exact micro-simulator (ours)",
@@ -77,32 +92,16 @@ def report(rows, results, trials, seconds, command, workers) -> str:
              "measured from the body poses in any frame of any trial of the cell.\n")
 
     L.append("## Table I: success rate\n")
-    L.append("| task | paper (people) | " + " | ".join(f"{m} c={c:+.1f}" for m in METHODS for c in THRESHOLDS) + " |")
-    L.append("|---|---|" + "---|" * (len(METHODS) * len(THRESHOLDS)))
-    for task, hands in CELLS:
-        paper = ", ".join(f"{n} {p:.1f} % (n={k})" for n, k, p in PAPER_TABLE_I[task])
-        cells = []
-        for m in METHODS:
-            for c in THRESHOLDS:
-                r = next((x for x in rows if x["method"] == m and x["threshold"] == c and x["task"] == task
-                          and x["hands"] == hands), None)
-                cells.append("–" if r is None else f"{100 * r['success_rate']:.1f} %")
-        L.append(f"| {task}, {hands} hand{'s' if hands > 1 else ''} | {paper} | " + " | ".join(cells) + " |")
+    L += _paper_table(rows, "paper (people)",
+                      lambda task: ", ".join(f"{n} {p:.1f} % (n={k})" for n, k, p in PAPER_TABLE_I[task]),
+                      lambda r: f"{100 * r['success_rate']:.1f} %")
     L.append("")
     L.append("## Table II: completion time of successful trials (s)\n")
-    L.append("The paper gives mean and standard deviation; we give median, mean ± sd.\n")
-    L.append("| task | paper (people), mean ± sd | " + " | ".join(f"{m} c={c:+.1f}" for m in METHODS for c in THRESHOLDS) + " |")
-    L.append("|---|---|" + "---|" * (len(METHODS) * len(THRESHOLDS)))
-    for task, hands in CELLS:
-        paper = ", ".join(f"{n} {m:.2f} ± {s:.2f}" for n, m, s in PAPER_TABLE_II[task])
-        cells = []
-        for m in METHODS:
-            for c in THRESHOLDS:
-                r = next((x for x in rows if x["method"] == m and x["threshold"] == c and x["task"] == task
-                          and x["hands"] == hands), None)
-                cells.append("–" if r is None or r["median_time_s"] is None else
-                             f"{r['median_time_s']:.2f}; {r['mean_time_s']:.2f} ± {_fmt(r['std_time_s'], '.2f')}")
-        L.append(f"| {task}, {hands} hand{'s' if hands > 1 else ''} | {paper} | " + " | ".join(cells) + " |")
+    L.append("The paper gives mean and standard deviation; we give median; mean ± sd.\n")
+    L += _paper_table(rows, "paper (people), mean ± sd",
+                      lambda task: ", ".join(f"{n} {m:.2f} ± {s:.2f}" for n, m, s in PAPER_TABLE_II[task]),
+                      lambda r: "–" if r["median_time_s"] is None else
+                      f"{r['median_time_s']:.2f}; {r['mean_time_s']:.2f} ± {_fmt(r['std_time_s'], '.2f')}")
     L.append("")
     L.append("## Ablations: every condition and task\n")
     L.append("| method | c | task | hands | trials | success | median time (s) | max violation (m) | "
