@@ -35,8 +35,8 @@ from . import _core as _h
 
 
 def quat_mul(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
+    ax, ay, az, aw = (float(v) for v in a)
+    bx, by, bz, bw = (float(v) for v in b)
     return np.array([aw * bx + ax * bw + ay * bz - az * by,
                      aw * by - ax * bz + ay * bw + az * bx,
                      aw * bz + ax * by - ay * bx + az * bw,
@@ -44,26 +44,27 @@ def quat_mul(a, b):
 
 
 def quat_rotate(q, v):
-    u = np.asarray(q[:3], float)
-    w = float(q[3])
-    v = np.asarray(v, float)
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    """v rotated by the unit quaternion q (plain float arithmetic: called a few times per frame)."""
+    x, y, z, w = (float(c) for c in q)
+    vx, vy, vz = (float(c) for c in v)
+    tx, ty, tz = 2 * (y * vz - z * vy), 2 * (z * vx - x * vz), 2 * (x * vy - y * vx)
+    return np.array([vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz), vz + w * tz + (x * ty - y * tx)])
 
 
 def axis_angle(axis, angle):
-    axis = np.asarray(axis, float)
-    axis = axis / np.linalg.norm(axis)
-    s = math.sin(0.5 * angle)
-    return np.array([axis[0] * s, axis[1] * s, axis[2] * s, math.cos(0.5 * angle)])
+    ax, ay, az = (float(c) for c in axis)
+    n = math.sqrt(ax * ax + ay * ay + az * az)
+    s = math.sin(0.5 * angle) / n
+    return np.array([ax * s, ay * s, az * s, math.cos(0.5 * angle)])
 
 
 def swing_pose(pose, pivot, axis, angle):
     """`pose` (7,) rotated by `angle` about the line through `pivot` along `axis`."""
     q = axis_angle(axis, angle)
-    p = np.asarray(pivot, float) + quat_rotate(q, np.asarray(pose[:3], float) - pivot)
+    pivot = np.asarray(pivot, float)
+    p = pivot + quat_rotate(q, np.asarray(pose[:3], float) - pivot)
     r = quat_mul(q, pose[3:])
-    return np.concatenate([p, r / np.linalg.norm(r)])
+    return np.concatenate([p, r / math.sqrt(float(r @ r))])
 
 
 def min_jerk(s):
