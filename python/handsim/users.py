@@ -14,8 +14,10 @@ Tasks (``task``, ``hands``):
 * ``"close"``: the lid starts open (90 deg). Style ``"carry"`` grasps the lid's top edge and swings it down
   to closed; style ``"push"`` only pushes: a flat hand from behind tips the lid over and follows it down
   without ever meaning to grasp it (the trials that count false grasps).
-* ``hands == 2``: the left hand holds the base at its left end first (palm on the left face, fingers round
-  the back, thumb round the front) and keeps holding it while the right hand works, as in the paper's Fig. 6.
+* ``hands == 2``: the left hand holds the base at its left end first (palm towards the left face, fingers
+  curled into the base: eq. 3 grasps it) and keeps holding it while the right hand works, as in the paper's
+  Fig. 6. The glove picks the left hand up where it already rests beside the base (the paper's subjects
+  picked the box up first; the reach of the left hand is not simulated).
 
 Every random choice comes from ``numpy.random.default_rng(seed)``: the same seed gives the same user and,
 with the same world, the same frames.
@@ -105,7 +107,7 @@ THUMB_UNDER = Shape(thumb_opposition=0.5)
 # through the 1.5 cm lid into the base).
 PINCH = Shape(curl=(0.2, 0.0, 0.0, 0.0, 0.0), thumb_opposition=0.6)
 # The left hand holding the base's left end (see BASE_HOLD_* below).
-BASE_HOLD = Shape(curl=(0.0, 0.55, 0.55, 0.55, 0.55), thumb_opposition=0.15, spread=0.0)
+BASE_HOLD = Shape(curl=(0.18, 0.6, 0.6, 0.6, 0.6), thumb_opposition=0.5)
 
 GRASP_SHAPES = {"pinch": PINCH, "thumb_under": THUMB_UNDER, "carry": THUMB_UNDER, "push": FLAT_HAND}
 
@@ -259,7 +261,6 @@ class SimulatedUser:
         self.left_pose = None
         self._waypoints = None
         self._start_angle = 0.0
-        self._left_start = None
         self._left_hold = None
         self._thumb_fix = self._thumb_compensation()
 
@@ -347,14 +348,12 @@ class SimulatedUser:
         if self.left is not None:
             if self._left_hold is None:
                 self._left_hold = self._left_hold_pose()
-                self._left_start = self._left_hold_pose(0.12)
-                self._left_start[1] += 0.08
             if self.phase == "left_reach":
                 if self.phase_t < d["left_reach"]:
-                    left_pose = lerp_pose(self._left_start, self._left_hold, min_jerk(self.phase_t / d["left_reach"]))
+                    left_pose = None  # the glove picks the left hand up only once it is at the base
                 else:
                     left_pose = self._left_hold
-                    left_shape = OPEN_HAND.blend(BASE_HOLD, min_jerk((self.phase_t - d["left_reach"]) / d["left_grip"]))
+                    left_shape = FLAT_HAND.blend(BASE_HOLD, min_jerk((self.phase_t - d["left_reach"]) / d["left_grip"]))
                     if self.phase_t >= d["left_reach"] + d["left_grip"]:
                         self._set("reach")
             else:
@@ -456,12 +455,18 @@ class SimulatedUser:
         self.left_pose = left_pose
         frames = [self.right.frame(self.t, palm, shape)]
         if self.left is not None:
-            frames.append(self.left.frame(self.t, left_pose, left_shape))
+            frames.append(untracked_frame(_h.Handedness.LEFT) if left_pose is None else
+                          self.left.frame(self.t, left_pose, left_shape))
         self.t += self.dt
         self.phase_t += self.dt
         return frames
 
 
-# Left hand holding the base (box frame): palm centre beside the left face, palm facing +X.
-BASE_HOLD_OFFSET = (-0.012, 0.0, 0.0)
-BASE_HOLD_ROTATION = axis_angle([0, 0, 1], -0.5 * math.pi)  # palm (-Y) turned to face +X
+# Left hand holding the base (box frame): palm centre 1.5 cm outside the left face, 2 cm below the base's
+# middle and 2 cm towards the front, palm facing +X, fingers towards the back, curled into the base. A search
+# over poses and shapes (2 cm grid, curl 0.4-0.8, opposition 0-1, the hand appearing in place) found this one
+# grasping the base by eq. 3 without touching the lid and moving the base by 2 mm. Virtual fingers curl into
+# the box (nothing stops them); the grasp comes from the opposing penetration directions inside it. A left
+# hand that slides in from the side or from above pushes the base or catches the lid first.
+BASE_HOLD_OFFSET = (-0.015, -0.02, 0.02)
+BASE_HOLD_ROTATION = axis_angle([0, 0, 1], 0.5 * math.pi)  # palm (-Y) turned to face +X
