@@ -16,6 +16,7 @@ import time
 from . import (CELLS, LID_OVERHANG_M, METHODS, SUCCESS, THRESHOLDS, TIME_LIMIT_S, have_ceres, json_rows,
                run_all, summarize)
 from .. import plots
+from . import core_issues
 
 # The issue asks for >= 300 trials per task and condition. Measured on the (loaded) 2-core development
 # machine: a trial costs ~0.2-0.4 s of wall time under the exact and soft methods but ~4-15 s under the paper
@@ -131,14 +132,20 @@ def report(rows, results, trials, paper_trials, seconds, command, workers) -> st
     L.append("The paper's time densities are its Fig. 9 (the issue calls it Fig. 8, which shows the task).\n")
     L.append("![lid angle and hinge violation](img/exp_traces.png)\n")
     L.append("## Known core issues found by these experiments\n")
-    L.append("1. *A held lid's base is thrown when the same hand touches the base.* With the lid grasped (hard "
-             "hinge, exact solver), a few hand particles touching the dynamic base (e.g. a thumb a few mm too "
-             "deep under the lip, or fingertips poking through the 1.5 cm lid) make the base move metres within a "
-             "second instead of being nudged. Most failed trials above are this (`knocked`). That is why the "
-             "experiments use a 2.5 cm lip and straight grasp fingers.")
-    L.append("2. *A lid at its upper limit that a hand keeps pushing further open bounces back*: at 90° with the "
-             "grasp just released, 3–4 thumb particles pressing it towards more open gave it ~290°/s towards "
-             "closed in one frame, and it fell shut. The users therefore open their fingers before backing off.\n")
+    L.append("Reproduced without any noise by `python -m handsim.experiments.core_issues` (default box, 1.5 cm lip, "
+             "one scripted right hand), output of this run:\n")
+    L.append("```")
+    L += core_issues.summary()
+    L.append("```\n")
+    L.append("1. *A base touched by the hand that holds its lid is thrown.* With the lid grasped (hard hinge, exact "
+             "solver), a few particles of the same hand touching the dynamic base (a thumb a few mm too deep under "
+             "the lip, or fingertips poking through the 1.5 cm lid) move the base metres instead of nudging it. "
+             "The one-hand rows' `knocked` column counts trials ending like this; a left hand holding the base "
+             "prevents it. The experiments use a 2.5 cm lip and straight grasp fingers to make it rarer.")
+    L.append("2. *A held lid swung past its upper limit can be flung shut.* Depending on how far past 90° the "
+             "hand goes, the grasp ends at the limit and the lid leaves it at several hundred °/s towards closed "
+             "(a push into the limit comes out as a velocity away from it). The simulated users swing to "
+             "N(93°, 2.5°) and open their fingers before they back off.\n")
     L.append("## Limits of this reproduction\n")
     L.append("- Times are of scripted motions whose speeds are drawn; they reflect the user model as much as the "
              "simulation (retries, lost grasps and the closed loop make the difference between conditions).")
