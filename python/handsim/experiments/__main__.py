@@ -98,6 +98,8 @@ def report(rows, results, trials, paper_trials, seconds, command, workers) -> st
              "measured from the body poses in any frame of any trial of the cell.\n")
 
     L.append("## Table I: success rate\n")
+    L.append("The paper's tasks were two-handed (one hand picks the box up, the other opens or closes the lid); "
+             "its numbers are repeated in the one-hand rows for comparison only.\n")
     L += _paper_table(rows, "paper (people)",
                       lambda task: ", ".join(f"{n} {p:.1f} % (n={k})" for n, k, p in PAPER_TABLE_I[task]),
                       lambda r: f"{100 * r['success_rate']:.1f} %")
