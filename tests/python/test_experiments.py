@@ -67,7 +67,7 @@ def test_a_clean_two_hand_open_trial_succeeds(method):
     assert 0.5 < r.time_s < 6
 
 
-def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches():
+def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches(tmp_path):
     results = {m: X.Bench(m, -0.7).run(clean("close", 1, "push"), trace=True) for m in X.METHODS}
     for m, r in results.items():
         assert r.success, (m, r)
@@ -82,6 +82,23 @@ def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches():
         assert tuple(row) == X.JSON_KEYS
         assert row["method"] in X.METHODS and row["threshold"] == -0.7 and row["trials"] == 1
         assert row["success_rate"] == 1.0 and row["median_time_s"] > 0
+    # the report and the plots are made from the same rows
+    from handsim import plots
+    from handsim.experiments.__main__ import report
+    text = report(rows, list(results.values()), 1, 1, 1.0, "python -m handsim.experiments --trials 1", 1)
+    assert "## Table I" in text and "## Table II" in text and "100.0 %" in text
+    assert "88.2 %" in text and "4.34 ± 1.71" in text
+    plots.success_rates(rows, str(tmp_path / "s.png"))
+    plots.time_kde(list(results.values()), str(tmp_path / "k.png"))
+    assert (tmp_path / "s.png").stat().st_size > 1000 and (tmp_path / "k.png").stat().st_size > 1000
+
+
+def test_kde_integrates_to_one():
+    from handsim.plots import kde
+    grid = np.linspace(-5, 15, 4001)
+    density = kde([2.0, 3.0, 3.5, 7.0], grid)
+    assert abs(float(np.sum(density) * (grid[1] - grid[0])) - 1.0) < 1e-3
+    assert grid[np.argmax(density)] < 4.5
 
 
 def test_world_def_of_the_conditions():
