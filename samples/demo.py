@@ -1,7 +1,7 @@
 """The main demo: the paper's jewelry box, opened and closed by a two-handed simulated user.
 
-The left hand steadies the base, the right hand pinches the lid's lip, swings it open, lets go, then grips
-the top edge again and carries it shut. Writes under out/demo/ (or the folder given as the first argument):
+The left hand holds the base, the right hand pinches the lid's lip, swings it open, lets go, then grips
+the lid again from behind and pushes it over, and it falls shut. Writes under out/demo/ (or the folder given as the first argument):
 filmstrip.png (key frames), demo.gif (animation), lid_angle.png and summary.txt; rendered headless with
 matplotlib (hand particles, box and lid as wireframes).
 """
@@ -25,7 +25,7 @@ EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4),
 
 
 def draw(ax, snap, title):
-    # side view (x right = world -Z... we look along -X at the box: horizontal = world Z, vertical = world Y)
+    # side view from the left: horizontal = world Z (the user at the right), vertical = world Y
     for corners, colour in ((snap["base"], "saddlebrown"), (snap["lid"], "darkgoldenrod")):
         for a, b in EDGES:
             ax.plot([corners[a, 2], corners[b, 2]], [corners[a, 1], corners[b, 1]], color=colour, lw=1.2)
