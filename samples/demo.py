@@ -1,8 +1,8 @@
 """The main demo: the paper's jewelry box, opened and closed by a two-handed simulated user.
 
-The left hand holds the base, the right hand pinches the lid's lip, swings it open, lets go, then grips
-the lid again from behind and pushes it over, and it falls shut. Writes under out/demo/ (or the folder given as the first argument):
-filmstrip.png (key frames), demo.gif (animation), lid_angle.png and summary.txt; rendered headless with
+The left hand holds the base; the right hand pinches the lid's lip, swings it open and lets go, then
+tips the open lid over from behind with a flat hand, and it falls shut. Writes under out/demo/ (or the
+folder given as the first argument): filmstrip.png (key frames), demo.gif (animation), lid_angle.png and summary.txt; rendered headless with
 matplotlib (hand particles, box and lid as wireframes).
 """
 import math
