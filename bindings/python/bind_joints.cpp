@@ -25,51 +25,46 @@ using namespace py_convert;
 
 std::string type_name(py::handle obj) { return py::str(py::type::of(obj).attr("__name__")); }
 
-// A bound C++ value of type T, or TypeError naming the argument: "joint: expected a JointId, got int".
-template <class T>
-T expect(py::handle obj, const std::string& argument, const char* what) {
-  if (!py::isinstance<T>(obj)) throw py::type_error(argument + ": expected a " + what + ", got " + type_name(obj));
-  return obj.cast<T>();
-}
-
 py::object optional_body(BodyId id) { return id.is_null() ? py::none() : py::cast(id); }
 
 BodyId to_optional_body(py::handle obj, const std::string& argument) {
   if (obj.is_none()) return BodyId{};
-  return expect<BodyId>(obj, argument, "BodyId or None (the world)");
+  if (!py::isinstance<BodyId>(obj))
+    throw py::type_error(argument + ": expected a BodyId or None (the world), got " + type_name(obj));
+  return obj.cast<BodyId>();
 }
 
-// Read/write properties whose setters convert with a named, shape-checked converter.
+// A read/write property: the getter converts the field with `out`, the setter converts the new value with
+// `in(value, argument)`, a named, shape-checked converter.
+template <class T, class F, class Out, class In>
+void converted_property(py::class_<T>& cls, const char* name, F T::*field, Out out, In in,
+                        const std::string& argument, const char* doc) {
+  cls.def_property(
+      name, [field, out](const T& s) { return out(s.*field); },
+      [field, in, argument](T& s, py::handle v) { s.*field = in(v, argument); }, doc);
+}
+
 template <class T>
 void vec3_property(py::class_<T>& cls, const char* name, Vec3 T::*field, const std::string& argument,
                    const char* doc) {
-  cls.def_property(
-      name, [field](const T& s) { return from_vec3(s.*field); },
-      [field, argument](T& s, py::handle v) { s.*field = to_vec3(v, argument); }, doc);
+  converted_property(cls, name, field, &from_vec3, &to_vec3, argument, doc);
 }
 
 template <class T>
 void quat_property(py::class_<T>& cls, const char* name, Quat T::*field, const std::string& argument,
                    const char* doc) {
-  cls.def_property(
-      name, [field](const T& s) { return from_quat(s.*field); },
-      [field, argument](T& s, py::handle v) { s.*field = to_quat(v, argument); }, doc);
+  converted_property(cls, name, field, &from_quat, &to_quat, argument, doc);
 }
 
 template <class T>
 void body_property(py::class_<T>& cls, const char* name, BodyId T::*field, const std::string& argument,
                    const char* doc) {
-  cls.def_property(
-      name, [field](const T& s) { return optional_body(s.*field); },
-      [field, argument](T& s, py::handle v) { s.*field = to_optional_body(v, argument); }, doc);
+  converted_property(cls, name, field, &optional_body, &to_optional_body, argument, doc);
 }
 
 template <class T, class E>
-void enum_property(py::class_<T>& cls, const char* name, E T::*field, const std::string& argument,
-                   const char* what) {
-  cls.def_property(
-      name, [field](const T& s) { return s.*field; },
-      [field, argument, what](T& s, py::handle v) { s.*field = expect<E>(v, argument, what); });
+void enum_property(py::class_<T>& cls, const char* name, E T::*field, const std::string& argument) {
+  converted_property(cls, name, field, [](E e) { return e; }, &cast_arg<E>, argument, "");
 }
 
 std::string body_repr(BodyId id) { return py::repr(optional_body(id)); }
@@ -81,7 +76,7 @@ py::class_<T> bind_def(py::module_& m, const char* name, const std::string& pref
   cls.def(py::init([name](py::kwargs kw) { return from_kwargs<T>(kw, name); }));
   body_property(cls, "parent", &T::parent, prefix + ".parent", "BodyId, or None for the world (the default)");
   body_property(cls, "child", &T::child, prefix + ".child", "BodyId of the constrained body");
-  enum_property(cls, "model", &T::model, prefix + ".model", "JointModel");
+  enum_property(cls, "model", &T::model, prefix + ".model");
   cls.def("__repr__", [name](const T& d) {
     return std::string(name) + "(parent=" + body_repr(d.parent) + ", child=" + body_repr(d.child) + ", model=" +
            std::string(py::str(py::cast(d.model))) + ")";
@@ -92,7 +87,7 @@ py::class_<T> bind_def(py::module_& m, const char* name, const std::string& pref
 // Hinge, slider and ball also have a solver and a damping.
 template <class T>
 void bind_solver_and_damping(py::class_<T>& cls, const std::string& prefix, const char* damping_doc) {
-  enum_property(cls, "solver", &T::solver, prefix + ".solver", "JointSolver");
+  enum_property(cls, "solver", &T::solver, prefix + ".solver");
   cls.def_readwrite("damping", &T::damping, damping_doc);
 }
 
@@ -219,7 +214,7 @@ void bind_world_joints(py::module_& m) {
       .def_readwrite("joint_max_iterations", &WorldDef::joint_max_iterations,
                      "iteration cap of the LM / LM_CERES micro-simulator, 1..10000 (the paper's 10)");
 
-  auto to_joint = [](py::handle h) { return expect<JointId>(h, "joint", "JointId"); };
+  auto to_joint = [](py::handle h) { return cast_arg<JointId>(h, "joint"); };
   auto world = py::reinterpret_borrow<py::class_<World>>(m.attr("World"));
   world
       .def("add_joint",
@@ -247,11 +242,6 @@ void bind_world_joints(py::module_& m) {
 }
 
 void bind_scenes(py::module_& m) {
-  // The hand bindings may register Handedness first (they are bound before this file); if not, it is needed
-  // here for lid_pinch_palm.
-  if (!py::detail::get_type_info(typeid(Handedness)))
-    py::enum_<Handedness>(m, "Handedness").value("LEFT", Handedness::Left).value("RIGHT", Handedness::Right);
-
   py::class_<JewelryBoxDef> def(m, "JewelryBoxDef", "The paper's jewelry box (Sec. IV) on a table; sizes in metres.");
   def.def(py::init([](py::kwargs kw) { return from_kwargs<JewelryBoxDef>(kw, "JewelryBoxDef"); }));
   vec3_property(def, "position", &JewelryBoxDef::position, "jewelry_box.position", "centre of the base's bottom face");
@@ -266,8 +256,8 @@ void bind_scenes(py::module_& m) {
       .def_readwrite("damping", &JewelryBoxDef::damping)
       .def_readwrite("friction", &JewelryBoxDef::friction)
       .def_readwrite("table", &JewelryBoxDef::table);
-  enum_property(def, "model", &JewelryBoxDef::model, "jewelry_box.model", "JointModel");
-  enum_property(def, "solver", &JewelryBoxDef::solver, "jewelry_box.solver", "JointSolver");
+  enum_property(def, "model", &JewelryBoxDef::model, "jewelry_box.model");
+  enum_property(def, "solver", &JewelryBoxDef::solver, "jewelry_box.solver");
 
   py::class_<JewelryBox>(m, "JewelryBox", "The bodies and the hinge build_jewelry_box added.")
       .def_property_readonly("table", [](const JewelryBox& b) { return optional_body(b.table); }, "BodyId or None")
@@ -283,7 +273,7 @@ void bind_scenes(py::module_& m) {
            py::arg("world"), "(3,) unit, world frame")
       .def("lid_pinch_palm",
            [](const JewelryBox& b, const World& w, py::handle handedness, double angle, double lift) {
-             return from_pose(b.lid_pinch_palm(w, expect<Handedness>(handedness, "handedness", "Handedness"),
+             return from_pose(b.lid_pinch_palm(w, cast_arg<Handedness>(handedness, "handedness"),
                                                angle, lift));
            },
            py::arg("world"), py::arg("handedness"), py::arg("angle"), py::arg("lift") = 0.0,
@@ -292,12 +282,11 @@ void bind_scenes(py::module_& m) {
   m.def(
       "build_jewelry_box",
       [](World& w, py::handle d) {
-        return build_jewelry_box(w, d.is_none() ? JewelryBoxDef() : expect<JewelryBoxDef>(d, "definition", "JewelryBoxDef"));
+        return build_jewelry_box(w, d.is_none() ? JewelryBoxDef() : cast_arg<JewelryBoxDef>(d, "definition"));
       },
       py::arg("world"), py::arg("definition") = py::none(),
       "Adds the table (optional), the base, the lid and the hinge; the world is unchanged on bad input.");
-  if (py::detail::get_type_info(typeid(HandPoseParams)))
-    m.def("lid_pinch_shape", &lid_pinch_shape, "The HandPoseParams lid_pinch_palm is made for.");
+  m.def("lid_pinch_shape", &lid_pinch_shape, "The HandPoseParams lid_pinch_palm is made for (bind_hand binds it).");
 }
 
 // --- handsim._core.solvers -----------------------------------------------------------------------------
@@ -305,20 +294,13 @@ void bind_scenes(py::module_& m) {
 Eigen::Matrix3Xd to_matrix3x(py::handle obj, const std::string& argument) {
   Array a = as_array(obj, argument);
   require_shape(a, {-1, 3}, argument);
-  // A row-major (N, 3) array has the memory layout of a column-major 3 x N matrix.
-  return Eigen::Map<const Eigen::Matrix3Xd>(a.data(), 3, a.shape(0));
+  return to_columns<double, 3>(a);
 }
 
 Eigen::VectorXd to_vector(py::handle obj, const std::string& argument) {
   Array a = as_array(obj, argument);
   require_shape(a, {-1}, argument);
   return Eigen::Map<const Eigen::VectorXd>(a.data(), a.shape(0));
-}
-
-py::array_t<double> from_matrix3x(const Eigen::Matrix3Xd& m) {
-  py::array_t<double> a({py::ssize_t(m.cols()), py::ssize_t(3)});
-  std::copy(m.data(), m.data() + m.size(), a.mutable_data());
-  return a;
 }
 
 py::array_t<double> from_mat3(const Mat3& m) {
@@ -359,7 +341,7 @@ World calls the same functions.)doc");
   s.def(
       "make_hinge_frame",
       [](py::handle definition) {
-        HingeDef d = expect<HingeDef>(definition, "definition", "HingeDef");
+        HingeDef d = cast_arg<HingeDef>(definition, "definition");
         // The solvers never look at the bodies: a definition without a child stands for any pair of bodies.
         if (d.child.is_null()) d.child = d.parent == BodyId{0, 1} ? BodyId{1, 1} : BodyId{0, 1};
         return make_hinge_frame(d, "definition");
@@ -368,7 +350,7 @@ World calls the same functions.)doc");
       "Validate and normalize a HingeDef (errors name definition.<field>); parent and child may be left unset.");
 
   py::class_<JointVertices>(s, "JointVertices", "A child's model vertices and their moments about the joint point.")
-      .def_property_readonly("points", [](const JointVertices& v) { return from_matrix3x(v.points); },
+      .def_property_readonly("points", [](const JointVertices& v) { return from_columns(v.points); },
                              "(N, 3) child frame")
       .def_property_readonly("weights",
                              [](const JointVertices& v) {
@@ -411,7 +393,7 @@ World calls the same functions.)doc");
       "solve_hinge",
       [](py::handle solver, const HingeFrame& frame, const JointVertices& vertices, py::handle parent,
          py::handle simulated, double previous, int max_iterations, double min_lever) {
-        return solve_hinge(expect<JointSolver>(solver, "solver", "JointSolver"), frame, vertices,
+        return solve_hinge(cast_arg<JointSolver>(solver, "solver"), frame, vertices,
                            to_valid_pose(parent, "parent"), to_valid_pose(simulated, "simulated"), previous,
                            solve_options(max_iterations, min_lever));
       },
@@ -425,7 +407,7 @@ World calls the same functions.)doc");
       "time_hinge_solves",
       [](py::handle solver, const HingeFrame& frame, const JointVertices& vertices, py::handle parent,
          py::handle simulated_poses, py::handle previous, int repeats, int max_iterations, double min_lever) {
-        const JointSolver sv = expect<JointSolver>(solver, "solver", "JointSolver");
+        const JointSolver sv = cast_arg<JointSolver>(solver, "solver");
         const Pose p = to_valid_pose(parent, "parent");
         Array sims = as_array(simulated_poses, "simulated_poses");
         require_shape(sims, {-1, 7}, "simulated_poses");

@@ -295,10 +295,6 @@ void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) co
   angular = from_bt(body.getAngularVelocity());
 }
 
-void BulletBackend::set_gravity(int handle, const Vec3& gravity) {
-  impl_->entries[handle].body->setGravity(bt(gravity));
-}
-
 void BulletBackend::step(double h) {
   // maxSubSteps = 0: Bullet takes exactly one step of length h; the world does the substepping.
   impl_->world.stepSimulation(h, 0, h);

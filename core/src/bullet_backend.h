@@ -28,7 +28,6 @@ class BulletBackend {
   void move_kinematic(int handle, const Pose& pose);
   void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
   void step(double h);
-  void set_gravity(int handle, const Vec3& gravity);
 
   // Soft joints (the JointModel::Soft baseline): Bullet constraints between two body handles, -1 for the
   // world. Each returns a constraint handle.

@@ -50,6 +50,22 @@ Pose pose(const Pose& p, const std::string& argument) {
   return {p.position, unit_quat(p.orientation, argument + ".orientation")};
 }
 
+Pose body_pose(const Pose& p, const std::string& argument) {
+  Pose out = pose(p, argument);
+  if (!(p.position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    fail(argument + ".position", "must be within " + fmt(kMaxCoordinate) + " m of the origin, got " + fmt(p.position));
+  return out;
+}
+
+void at_most(double v, double limit, const std::string& argument) {
+  if (!(v <= limit) || std::isnan(v)) fail(argument, "must be finite and <= " + fmt(limit) + ", got " + fmt(v));
+}
+
+void velocity(const Vec3& v, const std::string& argument) {
+  finite(v, argument);
+  if (!(v.norm() <= kMaxSpeed)) fail(argument, "must be at most " + fmt(kMaxSpeed) + " in magnitude, got " + fmt(v));
+}
+
 Vec3 unit_vector(const Vec3& v, const std::string& argument) {
   finite(v, argument);
   double n = v.norm();
@@ -59,6 +75,9 @@ Vec3 unit_vector(const Vec3& v, const std::string& argument) {
 
 void time_step(double dt, const std::string& argument) {
   if (!std::isfinite(dt) || dt <= 0) fail(argument, "must be finite and > 0, got " + fmt(dt));
+  // A frame longer than a minute is a caller's bug (a timestamp passed as dt, say); it would also make the
+  // world clock too coarse for the next frame's dt to advance it.
+  if (dt > kMaxTimeStep) fail(argument, "must be <= " + fmt(kMaxTimeStep) + " s, got " + fmt(dt));
 }
 
 }  // namespace handsim::validate

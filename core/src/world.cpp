@@ -51,9 +51,9 @@ BodyDef validated(const BodyDef& in) {
   BodyDef def = in;
   validate_shape(def.shape, "body.shape");
   validate::non_negative(def.mass, "body.mass");
-  def.pose = validate::pose(def.pose, "body.pose");
-  validate::finite(def.linear_velocity, "body.linear_velocity");
-  validate::finite(def.angular_velocity, "body.angular_velocity");
+  def.pose = validate::body_pose(def.pose, "body.pose");
+  validate::velocity(def.linear_velocity, "body.linear_velocity");
+  validate::velocity(def.angular_velocity, "body.angular_velocity");
   validate::non_negative(def.friction, "body.friction");
   validate::non_negative(def.restitution, "body.restitution");
   if (def.shape.type == ShapeType::TriangleMesh && def.mass > 0 && !def.kinematic)
@@ -285,7 +285,7 @@ Vec3 World::body_angular_velocity(BodyId id) const { return impl_->body(id).angu
 
 void World::set_body_pose(BodyId id, const Pose& pose) {
   Body& b = impl_->body(id);
-  Pose p = validate::pose(pose, "pose");
+  Pose p = validate::body_pose(pose, "pose");
   if (b.jointed())
     validate::fail("body", "is the child of a hard joint; move its parent or set the joint value",
                    Status::InvalidState);
@@ -298,8 +298,8 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
 
 void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular) {
   Body& b = impl_->body(id);
-  validate::finite(linear, "linear");
-  validate::finite(angular, "angular");
+  validate::velocity(linear, "linear");
+  validate::velocity(angular, "angular");
   if (b.motion == BodyMotion::Static)
     validate::fail("body", "a static body cannot have a velocity", Status::InvalidState);
   if (b.jointed())

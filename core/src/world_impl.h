@@ -32,8 +32,8 @@ struct Body {
   Vec3 unit_inertia = Vec3::Ones();  // principal moments per kg, body frame (for hard joints' dynamics)
   int hard_joint = -1;  // index of the hard joint whose child this is, or -1
   int soft_joint = -1;  // index of a soft joint whose child this is (driven by the hand, not attached)
-  // Pushed by a hand against gravity this frame (eq. 2): the hand carries the body's weight, so gravity is
-  // off for the frame; otherwise a slow push from below could never lift anything.
+  // A hard joint's child pushed by a hand against gravity this frame (eq. 2): the hand carries its weight,
+  // so the joint integrates no gravity for the frame (see docs/design.md).
   bool supported = false;
 
   // Released by its hand in this step: it leaves with the hand's velocity, which the object-centred update
@@ -115,6 +115,7 @@ struct World::Impl {
   // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
   std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
   std::vector<Event> events;
+  uint64_t nonfinite_recoveries = 0;  // Bullet results replaced by the last finite state (see substep)
   uint64_t body_version = 1;  // bumped on add/remove body, so per-hand caches know to rebuild
   // How many of `events` (at the front) the last step raised. The next step drops those and keeps the ones
   // that removals raised after it, so a caller who reads events() after each step sees those too.

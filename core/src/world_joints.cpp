@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <type_traits>
 
 namespace handsim {
 namespace {
@@ -408,42 +409,38 @@ std::string World::Impl::solve_joints(double dt) {
 // --- public API ---
 
 namespace {
-template <class Def>
-Joint joint_from(JointType type, const Def& d) {
+// The parts every joint definition shares; `frame` is the compiled frame (make_*_frame).
+template <class Def, class Frame>
+Joint joint_from(JointType type, const Def& d, Frame Joint::*slot, Frame frame) {
   Joint j;
   j.type = type;
   j.model = d.model;
+  j.*slot = std::move(frame);
+  if constexpr (!std::is_same_v<Def, FixedDef>) {
+    j.solver = d.solver;
+    j.damping = d.damping;
+  }
   return j;
 }
 }  // namespace
 
 JointId World::add_joint(const HingeDef& d) {
-  Joint j = joint_from(JointType::Hinge, d);
-  j.hinge = make_hinge_frame(d, "hinge");
-  j.solver = d.solver;
-  j.damping = d.damping;
+  Joint j = joint_from(JointType::Hinge, d, &Joint::hinge, make_hinge_frame(d, "hinge"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "hinge");
 }
 
 JointId World::add_joint(const SliderDef& d) {
-  Joint j = joint_from(JointType::Slider, d);
-  j.slider = make_slider_frame(d, "slider");
-  j.solver = d.solver;
-  j.damping = d.damping;
+  Joint j = joint_from(JointType::Slider, d, &Joint::slider, make_slider_frame(d, "slider"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "slider");
 }
 
 JointId World::add_joint(const BallDef& d) {
-  Joint j = joint_from(JointType::Ball, d);
-  j.ball = make_ball_frame(d, "ball");
-  j.solver = d.solver;
-  j.damping = d.damping;
+  Joint j = joint_from(JointType::Ball, d, &Joint::ball, make_ball_frame(d, "ball"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "ball");
 }
 
 JointId World::add_joint(const FixedDef& d) {
-  Joint j = joint_from(JointType::Fixed, d);
-  j.fixed = make_fixed_frame(d, "fixed");
+  Joint j = joint_from(JointType::Fixed, d, &Joint::fixed, make_fixed_frame(d, "fixed"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "fixed");
 }
 

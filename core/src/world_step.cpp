@@ -12,7 +12,7 @@ namespace handsim {
 void World::step(double dt, const std::vector<HandFrame>& frames) {
   Impl& w = *impl_;
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
-  w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(w.step_events));
+  w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(std::min(w.step_events, w.events.size())));
   w.reports.clear();
   auto stage = [&w](const char* name, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -331,8 +331,9 @@ std::string World::Impl::fit_touched_bodies(double dt) {
     const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
     const Vec3 linear = carried.linear / double(from.size()) + correction.linear;
     const Vec3 angular = carried.angular / double(from.size()) + correction.angular;
-    b.supported = linear.dot(def.gravity) < 0;
     if (b.jointed()) {
+      // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
+      b.supported = linear.dot(def.gravity) < 0;
       // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
       const double turn = angular.norm() * dt;
       const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
@@ -360,11 +361,7 @@ std::string World::Impl::simulate(double dt) {
     n = def.max_substeps;
     accumulator = n * h;  // drop what cannot be caught up
   }
-  for (Body& b : bodies)
-    if (b.alive && b.supported && !b.jointed()) backend->set_gravity(b.backend, Vec3::Zero());
   for (int i = 0; i < n; ++i) substep(h, i, n);
-  for (Body& b : bodies)
-    if (b.alive && b.supported && !b.jointed()) backend->set_gravity(b.backend, def.gravity);
   accumulator = std::max(0.0, accumulator - n * h);
   if (n > 0)
     for (Body& b : bodies)
@@ -387,7 +384,21 @@ void World::Impl::substep(double h, int i, int n) {
   backend->step(h);
   for (Body& b : bodies) {
     if (!b.alive || b.motion != BodyMotion::Dynamic) continue;
-    backend->read(b.backend, b.pose, b.linear, b.angular);
+    Pose pose;
+    Vec3 linear, angular;
+    backend->read(b.backend, pose, linear, angular);
+    if (pose.position.allFinite() && pose.orientation.coeffs().allFinite() && linear.allFinite() &&
+        angular.allFinite()) {
+      b.pose = pose;
+      b.linear = linear;
+      b.angular = angular;
+    } else {
+      // Safety net: the fuzz driver found Bullet returning NaN for two deeply overlapping, fast-spinning
+      // boxes. The body keeps its last finite pose, at rest, instead of poisoning the world.
+      b.linear = b.angular = Vec3::Zero();
+      backend->write(b.backend, b.pose, b.linear, b.angular);
+      ++nonfinite_recoveries;
+    }
   }
   if (!joint_order.empty()) {
     integrate_joints(h);

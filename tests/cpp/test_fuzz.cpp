@@ -73,12 +73,20 @@ class Fuzzer {
 
   // Runs one API call; a rejected call must leave the world exactly as it was.
   template <class F>
-  void attempt(F&& call) {
+  void attempt(F&& call, const char* what = "") {
+    last_op_ = what;
+    ++calls_;
+    if (std::getenv("HANDSIM_FUZZ_TRACE") && calls_ > std::atol(std::getenv("HANDSIM_FUZZ_TRACE")))
+      for (BodyId b : world_.bodies())
+        std::fprintf(stderr, "call %ld %s body %u y %.3g v %.3g w %.3g grasped %d\n", calls_, what, b.index,
+                     world_.body_pose(b).position.y(), world_.body_linear_velocity(b).norm(),
+                     world_.body_angular_velocity(b).norm(), int(world_.body_grasp(b).grasped));
     const uint64_t before = world_.state_hash();
     try {
       call();
     } catch (const Error& e) {
       ++rejected_;
+      if (std::getenv("HANDSIM_FUZZ_VERBOSE")) std::fprintf(stderr, "rejected: %s\n", e.what());
       ASSERT_FALSE(e.argument().empty()) << e.what();
       ASSERT_EQ(world_.state_hash(), before) << e.what();
     }
@@ -92,7 +100,7 @@ class Fuzzer {
     const int n = chance(0.01) ? 3 : pick(0, 2);
     for (int k = 0; k < n; ++k) frames.push_back(frame(k == 0 ? Handedness::Right : Handedness::Left));
     if (chance(0.01) && !frames.empty()) frames[0].handedness = Handedness::Left;
-    attempt([&] { world_.step(dt, frames); });
+    attempt([&] { world_.step(dt, frames); }, "step");
   }
 
   void edit_body() {
@@ -104,29 +112,29 @@ class Fuzzer {
       if (chance(0.05)) d.shape.radius = weird_number();
       d.mass = chance(0.1) ? weird_number() : uniform(0.01, 2);
       d.pose.position = box_.lid_front(world_) + Vec3(uniform(-0.2, 0.2), uniform(0, 0.3), uniform(-0.2, 0.2));
-      attempt([&] { added_.push_back(world_.add_body(d)); });
+      attempt([&] { added_.push_back(world_.add_body(d)); }, "add_body");
     } else if (op == 1 && !added_.empty()) {
       const size_t k = size_t(pick(0, int(added_.size()) - 1));
-      attempt([&] { world_.remove_body(added_[k]); });
+      attempt([&] { world_.remove_body(added_[k]); }, "remove_body");
       if (!world_.contains(added_[k])) added_.erase(added_.begin() + long(k));
     } else if (op == 2 && !bodies.empty()) {
       Pose p = world_.body_pose(bodies[size_t(pick(0, int(bodies.size()) - 1))]);
       if (chance(0.2)) p.position.y() = weird_number();
       if (chance(0.2)) p.orientation.coeffs() *= uniform(0, 2);
       const BodyId target = bodies[size_t(pick(0, int(bodies.size()) - 1))];
-      attempt([&] { world_.set_body_pose(target, p); });
+      attempt([&] { world_.set_body_pose(target, p); }, "set_body_pose");
     } else if (!bodies.empty()) {
       const BodyId target = bodies[size_t(pick(0, int(bodies.size()) - 1))];
       Vec3 v(uniform(-5, 5), uniform(-5, 5), uniform(-5, 5));
       if (chance(0.1)) v.x() = weird_number();
-      attempt([&] { world_.set_body_velocity(target, v, Vec3::Zero()); });
+      attempt([&] { world_.set_body_velocity(target, v, Vec3::Zero()); }, "set_body_velocity");
     }
   }
 
   void edit_joint() {
     if (chance(0.7)) {
       const double value = chance(0.1) ? weird_number() : uniform(-1, 3);
-      attempt([&] { world_.set_joint_value(box_.hinge, value); });
+      attempt([&] { world_.set_joint_value(box_.hinge, value); }, "set_joint_value");
       return;
     }
     if (added_.size() < 2) return;
@@ -136,9 +144,9 @@ class Fuzzer {
     h.lower = uniform(-2, 1);
     h.upper = h.lower + uniform(-0.5, 7);  // sometimes lower > upper or a span over 2 pi
     h.axis_parent = chance(0.1) ? Vec3(Vec3::Zero()) : Vec3(Vec3::UnitX());
-    attempt([&] { extra_joints_.push_back(world_.add_joint(h)); });
+    attempt([&] { extra_joints_.push_back(world_.add_joint(h)); }, "add_joint");
     if (chance(0.5) && !extra_joints_.empty()) {
-      attempt([&] { world_.remove_joint(extra_joints_.back()); });
+      attempt([&] { world_.remove_joint(extra_joints_.back()); }, "remove_joint");
       extra_joints_.pop_back();
     }
   }
@@ -153,7 +161,10 @@ class Fuzzer {
   void check_finite() {
     for (BodyId b : world_.bodies()) {
       const Pose p = world_.body_pose(b);
-      ASSERT_TRUE(p.position.allFinite() && p.orientation.coeffs().allFinite());
+      ASSERT_TRUE(p.position.allFinite() && p.orientation.coeffs().allFinite())
+          << "body " << b.index << " after " << last_op_ << " at call " << calls_ << " shape "
+          << int(world_.body_shape(b).type) << " mass " << world_.body_mass(b) << " motion "
+          << int(world_.body_motion(b)) << " r " << world_.body_shape(b).radius;
       ASSERT_TRUE(world_.body_linear_velocity(b).allFinite() && world_.body_angular_velocity(b).allFinite());
     }
     for (JointId j : world_.joints()) {
@@ -175,6 +186,8 @@ class Fuzzer {
   std::vector<BodyId> added_;
   std::vector<JointId> extra_joints_;
   long rejected_ = 0;
+  long calls_ = 0;
+  const char* last_op_ = "";
 };
 
 }  // namespace

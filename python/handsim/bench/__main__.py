@@ -10,6 +10,7 @@ import sys
 
 BENCHMARKS = {
     "hand": "handsim.bench.hand",
+    "joints": "handsim.bench.joints",
     "world": "handsim.bench.world",
 }
 

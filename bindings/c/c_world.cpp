@@ -1,0 +1,115 @@
+// C ABI: the world's lifetime and settings, the step, and what a step reports (stages, events, hash).
+#include "c_api.h"
+
+namespace handsim::capi {
+
+static size_t live_hands(const World& world) { return world.hands().size(); }
+
+}  // namespace handsim::capi
+
+using namespace handsim;
+using namespace handsim::capi;
+
+extern "C" {
+
+HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settings* out_settings) {
+  return guarded([&] { deref(out_settings, "out_settings") = as_c<handsim_world_settings>(WorldDef{}); });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_world_create(const handsim_world_settings* settings, handsim_world** out_world) {
+  return guarded([&] {
+    handsim_world*& out = deref(out_world, "out_world");
+    const WorldDef def = settings ? from_c<WorldDef>(*settings) : WorldDef{};
+    try {
+      validate_grasp_settings(def.grasp);  // it names the bare field ("frames_to_grasp")
+    } catch (const Error& e) {
+      rethrow_renamed(e, "", "settings.grasp.");
+    }
+    try {
+      out = new handsim_world(def);
+    } catch (const Error& e) {
+      rethrow_renamed(e, "world", "settings");
+    }
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_world_destroy(handsim_world* world) {
+  return guarded([&] {
+    if (!world) return;
+    checked(world).magic = 0;
+    delete world;
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_world_reset(handsim_world* world) {
+  return guarded([&] { checked(world).world.reset(); });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_get_world_settings(const handsim_world* world, handsim_world_settings* out_settings) {
+  return guarded([&] {
+    const World& w = checked(world).world;
+    deref(out_settings, "out_settings") = as_c<handsim_world_settings>(w.def());
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_world_time(const handsim_world* world, double* out_time) {
+  return guarded([&] {
+    const World& w = checked(world).world;
+    deref(out_time, "out_time") = w.time();
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_state_hash(const handsim_world* world, uint64_t* out_hash) {
+  return guarded([&] {
+    const World& w = checked(world).world;
+    deref(out_hash, "out_hash") = w.state_hash();
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const handsim_hand_frame* hands,
+                                          int32_t hand_count) {
+  return guarded([&] {
+    handsim_world& w = checked(world);
+    input_array(hands, hand_count, "hands", "hand_count");
+    // The core checks this too, but only after the frames were converted: reject a wild count first.
+    const size_t live = live_hands(w.world);
+    if (size_t(hand_count) > live)
+      validate::fail("hands", "got " + std::to_string(hand_count) + " frames but the world has " +
+                                  std::to_string(live) + " hands");
+    w.frames.resize(size_t(hand_count));
+    for (int32_t k = 0; k < hand_count; ++k)
+      capi::to_cpp(hands[k], "hands[" + std::to_string(k) + "]", w.frames[size_t(k)]);
+    w.world.step(dt, w.frames);
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_stage_reports(const handsim_world* world, handsim_stage_report* out_reports,
+                                                   int32_t capacity, int32_t* count) {
+  return guarded([&] {
+    const std::vector<StageReport>& reports = checked(world).world.stage_reports();
+    if (!output_buffer(out_reports, capacity, count, reports.size(), "out_reports")) return;
+    for (size_t i = 0; i < reports.size(); ++i)
+      out_reports[i] = {reports[i].seconds, reports[i].ran, 0, reports[i].name};
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_stage_summary(const handsim_world* world, char* out_text, int32_t capacity,
+                                                   int32_t* length) {
+  return guarded([&] {
+    const std::string text = checked(world).world.stage_summary();
+    if (output_buffer(out_text, capacity, length, text.size() + 1, "out_text"))
+      std::memcpy(out_text, text.c_str(), text.size() + 1);
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_events(const handsim_world* world, handsim_event* out_events, int32_t capacity,
+                                            int32_t* count) {
+  return guarded([&] {
+    const std::vector<Event>& events = checked(world).world.events();
+    if (!output_buffer(out_events, capacity, count, events.size(), "out_events")) return;
+    for (size_t i = 0; i < events.size(); ++i)
+      out_events[i] = as_c<handsim_event>(events[i]);
+  });
+}
+
+}  // extern "C"

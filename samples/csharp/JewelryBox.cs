@@ -1,0 +1,36 @@
+// A minimal C# console host (Mono or .NET): the paper's jewelry box, one right hand pinching the lid's lip and
+// swinging it open about the hinge over two seconds at 60 Hz; prints the lid angle every 10 frames.
+//   mcs -out:JewelryBox.exe bindings/csharp/Handsim.cs samples/csharp/JewelryBox.cs
+//   LD_LIBRARY_PATH=<dir of libhandsim.so> mono JewelryBox.exe
+using System;
+using Handsim;
+
+static class JewelryBoxSample
+{
+    static int Main()
+    {
+        const double dt = 1.0 / 60.0;
+        using (var world = new World())
+        {
+            JewelryBox box = world.BuildJewelryBox();
+            world.AddHand(HandDef.Default);
+            var hand = new TrackedHand(Handedness.Right);
+            HandPoseParams pinch = HandPoseParams.LidPinch;
+            Console.WriteLine("frame  time_s  hand_deg  lid_deg  grasped");
+            for (int i = 0; i <= 130; ++i)
+            {
+                // 10 frames to close the pinch, then the hand swings to 80 degrees over 2 s.
+                double t = i < 10 ? 0.0 : Math.Min((i - 10) / 120.0, 1.0);
+                double handAngle = t * 80.0 * Math.PI / 180.0;
+                Hands.MakeFrame(Handedness.Right, world.LidPinchPalm(box, Handedness.Right, handAngle), pinch, hand.Joints);
+                world.Step(dt, hand);
+                if (i % 10 == 0)
+                    Console.WriteLine(string.Format("{0,5}  {1,6:F3}  {2,8:F2}  {3,7:F2}  {4}", i, (i + 1) * dt, handAngle * 180.0 / Math.PI,
+                                                    world.JointState(box.Hinge).Value * 180.0 / Math.PI,
+                                                    world.BodyGrasp(box.Lid).Grasped ? "yes" : "no"));
+            }
+            Console.WriteLine("state_hash 0x" + world.StateHash.ToString("x16"));
+        }
+        return 0;
+    }
+}
