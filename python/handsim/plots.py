@@ -37,7 +37,7 @@ def success_rates(rows: List[dict], path: str):
     for r in rows:
         if label(r) not in conds:
             conds.append(label(r))
-    fig, ax = plt.subplots(figsize=(9, 4))
+    fig, ax = plt.subplots(figsize=(9, 4.8))
     width = 0.8 / len(conds)
     for j, cond in enumerate(conds):
         vals = [next((100 * r["success_rate"] for r in rows if label(r) == cond and (r["task"], r["hands"]) == c), 0)
@@ -48,7 +48,7 @@ def success_rates(rows: List[dict], path: str):
     ax.set_xticklabels([f"{t}, {h} hand{'s' if h > 1 else ''}" for t, h in cells])
     ax.set_ylabel("success rate (%)")
     ax.set_ylim(0, 100)
-    ax.legend(fontsize=7, ncol=3, loc="lower right")
+    ax.legend(fontsize=7, ncol=4, loc="upper center", bbox_to_anchor=(0.5, -0.1))
     ax.set_title("Jewelry box: success of simulated users")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
