@@ -13,5 +13,8 @@ build:
 bench:
 	scripts/setup && scripts/build && .venv/bin/python -m handsim.bench all
 
+experiments:
+	scripts/setup && scripts/build && .venv/bin/python -m handsim.experiments
+
 clean:
 	rm -rf build out

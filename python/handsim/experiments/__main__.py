@@ -1,0 +1,255 @@
+"""python -m handsim.experiments [--trials N] [--json] [--quick] [--workers W] [--docs DIR]
+
+Runs the jewelry-box experiments and regenerates DIR/experiments.md (default docs/) and DIR/img/*.png.
+--quick runs 10 trials per cell and writes to out/experiments-quick/ instead (docs stay as they are).
+--json prints {"conditions": [...]} on stdout (the report is still written).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+
+from . import (CELLS, LID_OVERHANG_M, METHODS, SUCCESS, THRESHOLDS, TIME_LIMIT_S, have_ceres, json_rows,
+               run_all, summarize)
+from .. import plots
+from . import core_issues
+
+# The issue asks for >= 300 trials per task and condition. Measured on the (loaded) 2-core development
+# machine: a trial costs ~0.2-0.4 s of wall time under the exact and soft methods but ~4-15 s under the paper
+# pipeline (render skinning and one Bullet object per particle every step: ~12-45 ms per step against
+# ~0.2-1 ms). 300 trials per cell for all 24 cells would take ~3-8 hours; the default runs 300 per cell for
+# exact and soft and PAPER_TRIALS per cell for the paper method (the same first users), and says so.
+DEFAULT_TRIALS = 300
+PAPER_TRIALS = 25
+
+PAPER_TABLE_I = {"open": [("Open 2D", 221, 88.2), ("Open 3D", 238, 90.3)],
+                 "close": [("Close 2D", 302, 99.0), ("Close 3D", 263, 98.9)]}
+PAPER_TABLE_II = {"open": [("Open 2D", 4.34, 1.71), ("Open 3D", 4.31, 1.44)],
+                  "close": [("Close 2D", 2.96, 1.17), ("Close 3D", 3.12, 1.34)]}
+
+
+def _fmt(x, spec, none="–"):
+    return none if x is None else format(x, spec)
+
+
+def _ci95(p, n):
+    return 1.96 * math.sqrt(max(p * (1 - p), 0.25 / n) / n)
+
+
+def _findings(rows):
+    """Sentences about the run, every number taken from `rows`."""
+    def pick(**kw):
+        return [r for r in rows if all(r[k] == v for k, v in kw.items())]
+    hard = [r for r in rows if r["method"] != "soft"]
+    soft = pick(method="soft")
+    soft_open = pick(method="soft", task="open")
+    out = [f"- Hard hinge (exact and paper): the largest hinge violation in any frame of any trial was "
+           f"{max((r['max_violation_m'] for r in hard), default=0.0):.1e} m and the largest limit overshoot "
+           f"{max((r['max_overshoot_rad'] for r in hard), default=0.0):.1e} rad (rounding). Soft baseline: up to "
+           f"{max((r['max_violation_m'] for r in soft), default=0.0):.2f} m and {max((r['max_overshoot_rad'] for r in soft), default=0.0):.1f} rad; "
+           f"it opened the lid in at most {100 * max((r['success_rate'] for r in soft_open), default=0.0):.1f} % of the trials of a "
+           f"cell, because the kinematically held lid pulls the constraint apart (the rubber band of Sec. III)."]
+    for m in ("exact", "paper"):
+        neg = pick(method=m, threshold=-0.7, task="close")
+        pos = pick(method=m, threshold=0.7, task="close")
+        if neg and pos:
+            rates_neg = ", ".join(f"{100 * r['success_rate']:.1f} %" for r in pick(method=m, threshold=-0.7, task="open"))
+            rates_pos = ", ".join(f"{100 * r['success_rate']:.1f} %" for r in pick(method=m, threshold=0.7, task="open"))
+            out.append(f"- Threshold, {m}: push-only closing trials that grasped the lid: "
+                       f"{sum(r['false_grasps'] for r in neg)} of {sum(r['push_trials'] for r in neg)} with c = -0.7, "
+                       f"{sum(r['false_grasps'] for r in pos)} of {sum(r['push_trials'] for r in pos)} with c = +0.7. "
+                       f"Opening (one hand, two hands): {rates_neg} with c = -0.7, {rates_pos} with c = +0.7."
+                       + (" The looser threshold grasps more, wanted or not." if
+                          sum(r["false_grasps"] for r in pos) > sum(r["false_grasps"] for r in neg) else ""))
+    knocked1 = sum(r["knocked"] for r in pick(method="exact", hands=1))
+    knocked2 = sum(r["knocked"] for r in pick(method="exact", hands=2))
+    n1 = sum(r["trials"] for r in pick(method="exact", hands=1))
+    n2 = sum(r["trials"] for r in pick(method="exact", hands=2))
+    out.append(f"- Knocked boxes, exact: {knocked1} of {n1} one-hand trials, {knocked2} of {n2} two-hand trials "
+               f"(core issue 1 below)" + ("; a left hand that holds the base keeps it in place more often."
+                                          if n1 and n2 and knocked2 / n2 < knocked1 / n1 else "."))
+    return out
+
+
+def _paper_table(rows, paper_header, paper_cell, our_cell):
+    """Markdown rows: one line per task cell, the paper's numbers, then ours per method and threshold."""
+    out = ["| task | " + paper_header + " | " + " | ".join(f"{m} c={c:+.1f}" for m in METHODS for c in THRESHOLDS) + " |",
+           "|---|---|" + "---|" * (len(METHODS) * len(THRESHOLDS))]
+    for task, hands in CELLS:
+        cells = []
+        for m in METHODS:
+            for c in THRESHOLDS:
+                r = next((x for x in rows if x["method"] == m and x["threshold"] == c and x["task"] == task
+                          and x["hands"] == hands), None)
+                cells.append("–" if r is None else our_cell(r))
+        out.append(f"| {task}, {hands} hand{'s' if hands > 1 else ''} | {paper_cell(task)} | " + " | ".join(cells) + " |")
+    return out
+
+
+def report(rows, results, trials, paper_trials, seconds, command, workers) -> str:
+    import handsim
+    cond_names = {"exact": "hard hinge + exact micro-simulator (ours)",
+                  "paper": "paper pipeline: Bullet particle objects, no culling, Ceres LM 10 its"
+                           + ("" if have_ceres() else " (built without Ceres: Eigen LM)"),
+                  "soft": "soft baseline: Bullet btHingeConstraint, forces only"}
+    L = []
+    L.append("# Jewelry-box experiments (Sec. IV of Kim & Park) with simulated users\n")
+    L.append(f"Generated by `{command}` ({trials} trials per task and condition for the exact and soft methods, "
+             f"{paper_trials} for the paper method — its pipeline costs ~40x per step, see `__main__.py`; "
+             f"{len(results)} trials in all, "
+             f"{seconds:.0f} s wall time with {workers} worker process(es), handsim {handsim.__version__}). Every number "
+             "below comes from that run; rerun the command to regenerate this file and `docs/img/`.\n")
+    L.append("**The paper's numbers are of people** (IMU glove, 2D display or HMD, a human judge); **ours are of "
+             "scripted simulated users** (`handsim/users.py`) judged by fixed criteria. They are set side by side "
+             "for orientation, not as a replication of the user study.\n")
+    L.append("## Scene\n")
+    L.append("`build_jewelry_box` with its defaults (base 18 x 7 x 12 cm, 0.5 kg, on a 75 cm table; lid 1.5 cm "
+             f"thick, 0.15 kg; hinge on the back top edge, limits 0–90°), except the lid's lip: **{LID_OVERHANG_M * 100:.1f} cm** "
+             "past the base's front instead of 1.5 cm (see *Known core issues*). Each trial drops the box at a "
+             "random spot (±5 cm sideways, ±3 cm in depth, ±15° yaw). 60 Hz frames, 240 Hz physics substeps.\n")
+    L.append("## Simulated users\n")
+    L.append("Each trial draws, from its seed: speed (log-normal, σ 0.3, 0.5–2.2x), hand size (scale N(1, 0.07)), "
+             "aim error at the lip (σ 12 mm sideways, 1.5 mm height, 2 mm depth), grasp style, how far it swings "
+             "the lid (N(93°, 2.5°)), reaction time (0.25–0.5 s), glove errors like an IMU glove's: per-frame "
+             "finger noise (σ 0.005–0.02 of full curl/opposition), finger drift (Ornstein-Uhlenbeck, σ up to 0.03, "
+             "τ 1 s), palm jitter (σ 0.5–2 mm), uncorrected palm drift (OU, σ up to 4 mm, τ 0.7 s), heading drift "
+             "(σ up to 3°), and tracking dropouts (Poisson 0.25 per trial, lengths exponential, mean 0.12 s). "
+             "The users are closed-loop like a person at a screen: they aim at where the lid is, notice when it "
+             "no longer follows the hand (lag > 20° for longer than their reaction time) or fell back after they "
+             "let go, and start again (at most 3 retries).\n")
+    L.append("- **open**: reach over the lip, descend in front of it, close in with the thumb under the lip and the "
+             "fingers on the lid (styles *thumb_under*: `lid_pinch_shape()`; *pinch*: thumb bent and pressed "
+             "harder), swing the lid about the hinge to the drawn angle, open the fingers, withdraw upwards.")
+    L.append("- **close**: from 90°, *carry*: grip the top edge and swing it down to closed; *push*: a flat hand "
+             "from behind tips the lid to 30° and lets it fall (push-only trials: any grasp of the lid is a false "
+             "grasp).")
+    L.append("- **two hands**: the left hand holds the base first (it appears beside the base's left end, palm "
+             "towards it, and curls its fingers into it: eq. 3 grasps the base) and keeps holding it, with its "
+             "own glove errors, while the right hand works (the paper's Fig. 6).\n")
+    L.append(f"**Success**: {SUCCESS}. **Completion time**: from the first touch of the box to the last time "
+             "the lid entered the goal, successful trials only. **Drops**: trials where the lid's grasp ended "
+             "while the user still meant to hold it. **False grasps**: push-only trials in which the lid got "
+             "grasped. **Max violation / overshoot**: the largest hinge separation (m) and limit overshoot (rad) "
+             "measured from the body poses in any frame of any trial of the cell.\n")
+
+    L.append("## Table I: success rate\n")
+    L.append("The paper's tasks were two-handed (one hand picks the box up, the other opens or closes the lid); "
+             "its numbers are repeated in the one-hand rows for comparison only.\n")
+    L += _paper_table(rows, "paper (people)",
+                      lambda task: ", ".join(f"{n} {p:.1f} % (n={k})" for n, k, p in PAPER_TABLE_I[task]),
+                      lambda r: f"{100 * r['success_rate']:.1f} %")
+    L.append("")
+    L.append("## Table II: completion time of successful trials (s)\n")
+    L.append("The paper gives mean and standard deviation; we give median; mean ± sd.\n")
+    L += _paper_table(rows, "paper (people), mean ± sd",
+                      lambda task: ", ".join(f"{n} {m:.2f} ± {s:.2f}" for n, m, s in PAPER_TABLE_II[task]),
+                      lambda r: "–" if r["median_time_s"] is None else
+                      f"{r['median_time_s']:.2f}; {r['mean_time_s']:.2f} ± {_fmt(r['std_time_s'], '.2f')}")
+    L.append("")
+    L.append("## Ablations: every condition and task\n")
+    L.append("Success ± the half-width of its 95 % confidence interval (normal approximation). Step: mean wall "
+             "time of `World.step` per frame.\n")
+    L.append("| method | c | task | hands | trials | success | median time (s) | max violation (m) | "
+             "max overshoot (rad) | false grasps (of push trials) | drops | knocked | retried | step (ms) |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        L.append(f"| {r['method']} | {r['threshold']:+.1f} | {r['task']} | {r['hands']} | {r['trials']} | "
+                 f"{100 * r['success_rate']:.1f} ± {100 * _ci95(r['success_rate'], r['trials']):.1f} % | "
+                 f"{_fmt(r['median_time_s'], '.2f')} | {r['max_violation_m']:.2e} | "
+                 f"{r['max_overshoot_rad']:.2e} | {r['false_grasps']} ({r['push_trials']}) | {r['drops']} | "
+                 f"{r['knocked']} | {r['retries']} | {r['step_ms']:.2f} |")
+    L.append("")
+    L.append("### What the run shows\n")
+    L += _findings(rows)
+    L.append("")
+    L.append("Methods: " + "; ".join(f"**{k}**: {v}" for k, v in cond_names.items()) + ". Threshold c is eq. 3's "
+             "grasp threshold: −0.7 (our reading: opposing contacts) or +0.7 (the paper's literal text).\n")
+    L.append("Success per grasp style:\n")
+    for r in rows:
+        L.append(f"- {r['method']} c={r['threshold']:+.1f} {r['task']}/{r['hands']}: " +
+                 ", ".join(f"{k} {100 * v:.0f} %" for k, v in r["style_success"].items()))
+    L.append("")
+    L.append("## Plots\n")
+    L.append("![success rates](img/exp_success.png)\n")
+    L.append("![completion time densities](img/exp_time_kde.png)\n")
+    L.append("The paper's time densities are its Fig. 9 (the issue calls it Fig. 8, which shows the task).\n")
+    L.append("![lid angle and hinge violation](img/exp_traces.png)\n")
+    L.append("## Known core issues found by these experiments\n")
+    L.append("Reproduced without any noise by `python -m handsim.experiments.core_issues` (default box, 1.5 cm lip, "
+             "one scripted right hand), output of this run:\n")
+    L.append("```")
+    L += core_issues.summary()
+    L.append("```\n")
+    L.append("1. *A base touched by the hand that holds its lid is thrown.* With the lid grasped (hard hinge, exact "
+             "solver), a few particles of the same hand touching the dynamic base (a thumb a few mm too deep under "
+             "the lip, or fingertips poking through the 1.5 cm lid) move the base metres instead of nudging it. "
+             "The `knocked` column counts trials ending like this (and any other box moved > 5 cm or tipped). "
+             "The experiments use a 2.5 cm lip and straight grasp fingers to make it rarer.")
+    L.append("2. *A held lid swung past its upper limit can be flung shut.* Depending on how far past 90° the "
+             "hand goes, the grasp ends at the limit and the lid leaves it at several hundred °/s towards closed "
+             "(a push into the limit comes out as a velocity away from it). The simulated users swing to "
+             "N(93°, 2.5°) and open their fingers before they back off.\n")
+    L.append("## Limits of this reproduction\n")
+    L.append("- Times are of scripted motions whose speeds are drawn; they reflect the user model as much as the "
+             "simulation (retries, lost grasps and the closed loop make the difference between conditions).")
+    L.append("- The left hand's reach to the base is not simulated: the glove picks the hand up beside the base. "
+             "Left hands that slid in from the side or from above pushed the base or caught the lid first. "
+             "Trials in which the left hand grasped the base: " +
+             ", ".join(f"{r['method']} c={r['threshold']:+.1f} {r['task']}: {r['base_held']}/{r['trials']}"
+                       for r in rows if r["hands"] == 2) + ".")
+    L.append("")
+    return "\n".join(L)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python -m handsim.experiments", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--trials", type=int, default=DEFAULT_TRIALS, help=f"trials per task and condition (default {DEFAULT_TRIALS})")
+    ap.add_argument("--paper-trials", type=int, default=PAPER_TRIALS,
+                    help=f"cap for the paper method's trials per cell (default {PAPER_TRIALS}; it is ~40x slower)")
+    ap.add_argument("--json", action="store_true", help="print the conditions as JSON on stdout")
+    ap.add_argument("--quick", action="store_true", help="10 trials per cell, written to out/experiments-quick")
+    ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="parallel processes")
+    ap.add_argument("--docs", default=None, help="where experiments.md and img/ go (default docs/)")
+    args = ap.parse_args(argv)
+    trials = 10 if args.quick else args.trials
+    if trials < 1:
+        ap.error("--trials must be >= 1")
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
+    docs = args.docs or os.path.join(root, "out", "experiments-quick" if args.quick else "docs")
+    if not args.docs and not args.quick:
+        docs = os.path.join(root, "docs")
+    os.makedirs(os.path.join(docs, "img"), exist_ok=True)
+    t0 = time.perf_counter()
+    paper_trials = min(trials, args.paper_trials)
+    results = run_all(trials, workers=args.workers, paper_trials=paper_trials)
+    seconds = time.perf_counter() - t0
+    rows = summarize(results)
+    plots.success_rates(rows, os.path.join(docs, "img", "exp_success.png"))
+    plots.time_kde(results, os.path.join(docs, "img", "exp_time_kde.png"))
+    plots.traces(results, os.path.join(docs, "img", "exp_traces.png"))
+    command = "python -m handsim.experiments" + ("" if trials == DEFAULT_TRIALS and not args.quick else
+                                                 (" --quick" if args.quick else f" --trials {trials}"))
+    if paper_trials != min(trials, PAPER_TRIALS):
+        command += f" --paper-trials {paper_trials}"
+    with open(os.path.join(docs, "experiments.md"), "w") as f:
+        f.write(report(rows, results, trials, paper_trials, seconds, command, args.workers))
+    if args.json:
+        json.dump(json_rows(rows), sys.stdout, indent=1)
+        print()
+    else:
+        for r in rows:
+            print(f"{r['method']:5s} c={r['threshold']:+.1f} {r['task']:5s} {r['hands']}h: success "
+                  f"{100 * r['success_rate']:5.1f} %  median {_fmt(r['median_time_s'], '.2f')} s  viol "
+                  f"{r['max_violation_m']:.1e} m  overshoot {r['max_overshoot_rad']:.1e} rad  false grasps "
+                  f"{r['false_grasps']}  drops {r['drops']}")
+        print(f"{len(results)} trials in {seconds:.0f} s; report: {os.path.join(docs, 'experiments.md')}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

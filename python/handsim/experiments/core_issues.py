@@ -1,0 +1,77 @@
+"""Reproductions of the core behaviours the experiments ran into (``python -m handsim.experiments.core_issues``).
+
+Each function runs one scripted, noise-free hand against the default jewelry box and returns the numbers the
+report quotes; nothing here is random.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import _core as _h
+from .. import users as _users
+
+R = _h.Handedness.RIGHT
+
+
+def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015):
+    """A right hand pinches the closed lid (lid_pinch_palm, lid_pinch_shape) with its palm `depth_m` closer
+    to the hinge than the scene's pose, so the thumb grazes the base's front face, and swings the lid open
+    over one second. Returns (base displacement m, max particles touching the base, lid grasped)."""
+    w = _h.World()
+    d = _h.JewelryBoxDef()
+    d.lid_overhang = lid_overhang
+    box = _h.build_jewelry_box(w, d)
+    hand = w.add_hand(_h.HandDef())
+    b0 = np.asarray(w.body_pose(box.base), float)
+    touching, grasped = 0, False
+    shape = _h.lid_pinch_shape()
+    for i in range(100):
+        angle = min(max((i - 10) / 60, 0.0), 1.0) * math.radians(swing_deg)
+        p = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
+        p[:3] += _users.quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
+        p = _users.swing_pose(p, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
+        w.step(1 / 60, [_h.make_hand_frame(R, p, thumb_opposition=shape.thumb_opposition)])
+        touching = max(touching, w.body_contact_count(box.base, hand))
+        grasped = grasped or w.body_grasp(box.lid).grasped
+    moved = float(np.linalg.norm(np.asarray(w.body_pose(box.base))[:3] - b0[:3]))
+    return moved, touching, grasped
+
+
+def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015):
+    """The hand pinches the lid, swings it (min-jerk, 1.2 s) to `swing_deg`, past the 90 deg limit, and holds
+    still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg)."""
+    w = _h.World()
+    d = _h.JewelryBoxDef()
+    d.lid_overhang = lid_overhang
+    box = _h.build_jewelry_box(w, d)
+    w.add_hand(_h.HandDef())
+    closed = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
+    reached, worst = False, 0.0
+    for i in range(200):
+        angle = _users.min_jerk((i - 10) / 72) * math.radians(swing_deg)
+        p = _users.swing_pose(closed, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
+        w.step(1 / 60, [_h.make_hand_frame(R, p, thumb_opposition=0.5)])
+        s = w.joint_state(box.hinge)
+        reached = reached or s.value >= 0.5 * math.pi - 1e-9
+        if reached:
+            worst = max(worst, -math.degrees(s.rate))
+    return worst, math.degrees(w.joint_state(box.hinge).value)
+
+
+def summary() -> list:
+    lines = []
+    for depth in (0.0, 0.002, 0.004):
+        moved, touching, grasped = base_thrown_by_a_touch(depth)
+        lines.append(f"pinch {depth * 1000:.0f} mm deeper than lid_pinch_palm, swing to 95 deg in 1 s (1.5 cm lip): "
+                     f"lid grasped {grasped}, up to {touching} particles on the base, base moved {moved:.2f} m")
+    for swing in (100.0, 105.0, 112.0):
+        rate, final = lid_bounces_off_upper_limit(swing)
+        lines.append(f"swing a held lid to {swing:.0f} deg (past the 90 deg limit) in 1.2 s and hold still (1.5 cm "
+                     f"lip): fastest closing rate after reaching 90 deg {rate:.0f} deg/s, final angle {final:.1f} deg")
+    return lines
+
+
+if __name__ == "__main__":
+    print("\n".join(summary()))

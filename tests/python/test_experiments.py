@@ -1,0 +1,111 @@
+"""The jewelry-box experiments: simulated users are deterministic for a seed, a clean user succeeds under
+every method, the report's JSON has the issue's keys."""
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import handsim
+from handsim import experiments as X
+from handsim import users as U
+
+
+def clean(task, hands, style):
+    """A calm user without glove errors, the box where the scene puts it."""
+    u = U.draw_user(3, task, hands)
+    return dataclasses.replace(u, style=style, speed=1.0, scale=1.0, approach=(0.0, 0.0, 0.002),
+                               finger_noise=0.0, finger_drift=0.0, palm_noise=0.0, palm_drift=0.0,
+                               yaw_drift=0.0, dropouts=(), box_shift=(0.0, 0.0, 0.0))
+
+
+def frames_of(user, n=90):
+    bench = X.Bench("exact", -0.7)
+    box = bench.new_box(user)
+    sim = U.SimulatedUser(user, bench.world, box, X.DT)
+    out = []
+    for _ in range(n):
+        fr = sim.frames()
+        out.append(np.concatenate([np.asarray(f.positions).ravel() for f in fr]))
+        bench.world.step(X.DT, fr)
+    return np.array(out), bench.world.state_hash()
+
+
+def test_users_are_deterministic_for_a_seed_and_differ_between_seeds():
+    assert U.draw_user(7, "open", 2) == U.draw_user(7, "open", 2)
+    assert U.draw_user(7, "open", 2) != U.draw_user(8, "open", 2)
+    assert U.draw_user(7, "open", 1) != U.draw_user(7, "close", 1)
+    a, ha = frames_of(U.draw_user(11, "open", 2))
+    b, hb = frames_of(U.draw_user(11, "open", 2))
+    np.testing.assert_array_equal(a, b)
+    assert ha == hb
+    c, _ = frames_of(U.draw_user(12, "open", 2))
+    assert a.shape == c.shape and not np.array_equal(a, c)
+
+
+def test_draws_cover_the_styles_and_stay_in_range():
+    users = [U.draw_user(i, t, 1) for i in range(200) for t in U.TASKS]
+    assert {u.style for u in users} == set(U.OPEN_STYLES) | set(U.CLOSE_STYLES)
+    assert all(0.5 <= u.speed <= 2.2 and 0.85 <= u.scale <= 1.15 for u in users)
+    assert 0.05 < np.mean([len(u.dropouts) > 0 for u in users]) < 0.4
+    with pytest.raises(ValueError):
+        U.draw_user(0, "lift", 1)
+
+
+def test_untracked_frame_is_untracked():
+    f = U.untracked_frame(handsim.Handedness.RIGHT)
+    assert not np.asarray(f.valid).any()
+
+
+@pytest.mark.parametrize("method", ["exact", "paper"])
+def test_a_clean_two_hand_open_trial_succeeds(method):
+    r = X.Bench(method, -0.7).run(clean("open", 2, "thumb_under"))
+    assert r.success, r
+    assert r.final_angle >= X.OPEN_GOAL
+    assert r.grasp_begins >= 1 and not r.drop and not r.knocked
+    assert r.max_violation_m < 1e-9 and r.max_overshoot_rad < 1e-9
+    assert 0.5 < r.time_s < 6
+
+
+def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches(tmp_path):
+    results = {m: X.Bench(m, -0.7).run(clean("close", 1, "push"), trace=True) for m in X.METHODS}
+    for m, r in results.items():
+        assert r.success, (m, r)
+        assert r.final_angle <= X.CLOSED_GOAL
+        assert not r.false_grasp
+    assert results["exact"].max_violation_m < 1e-9
+    assert results["soft"].max_violation_m > 1e3 * results["exact"].max_violation_m
+    rows = X.summarize(list(results.values()))
+    doc = X.json_rows(rows)
+    assert list(doc) == ["conditions"] and len(doc["conditions"]) == 3
+    for row in doc["conditions"]:
+        assert tuple(row) == X.JSON_KEYS
+        assert row["method"] in X.METHODS and row["threshold"] == -0.7 and row["trials"] == 1
+        assert row["success_rate"] == 1.0 and row["median_time_s"] > 0
+    # the report and the plots are made from the same rows
+    from handsim import plots
+    from handsim.experiments.__main__ import report
+    text = report(rows, list(results.values()), 1, 1, 1.0, "python -m handsim.experiments --trials 1", 1)
+    assert "## Table I" in text and "## Table II" in text and "100.0 %" in text
+    assert "88.2 %" in text and "4.34 ± 1.71" in text
+    plots.success_rates(rows, str(tmp_path / "s.png"))
+    plots.time_kde(list(results.values()), str(tmp_path / "k.png"))
+    assert (tmp_path / "s.png").stat().st_size > 1000 and (tmp_path / "k.png").stat().st_size > 1000
+
+
+def test_kde_integrates_to_one():
+    from handsim.plots import kde
+    grid = np.linspace(-5, 15, 4001)
+    density = kde([2.0, 3.0, 3.5, 7.0], grid)
+    assert abs(float(np.sum(density) * (grid[1] - grid[0])) - 1.0) < 1e-3
+    assert grid[np.argmax(density)] < 4.5
+
+
+def test_world_def_of_the_conditions():
+    wd = X.world_def("paper", 0.7)
+    assert wd.paper_pipeline and wd.particle_contacts == handsim.ParticleContacts.BULLET_OBJECTS
+    assert wd.grasp.cos_threshold == 0.7
+    assert not X.world_def("exact", -0.7).paper_pipeline
+    assert X.box_def("soft").model == handsim.JointModel.SOFT
+    with pytest.raises(ValueError):
+        X.world_def("magic", -0.7)
