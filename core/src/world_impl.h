@@ -72,6 +72,7 @@ struct Joint {
   double value = 0, rate = 0;          // hinge / slider coordinate and its rate
   Quat rotation = Quat::Identity();    // ball
   Vec3 spin = Vec3::Zero();            // ball: angular velocity relative to the parent, world frame
+  Quat solved_rotation = Quat::Identity();  // ball: the micro-simulator's last answer
   int constraint = -1;                 // soft: Bullet constraint handle
   int depth = 0;                       // hard: joints between the child and the root of its group
   JointSolveResult last;

@@ -355,6 +355,7 @@ void World::Impl::project_push(Joint& j, const Pose& simulated, double dt) {
     case JointType::Ball: {
       const BallSolveResult r = solve_ball_exact(j.ball, j.vertices.moments, p, simulated, j.rotation, o);
       j.spin = rotation_vector(p.orientation * r.rotation * (p.orientation * j.rotation).conjugate()) / dt;
+      j.solved_rotation = r.rotation;
       record(j, r);
       break;
     }
@@ -367,9 +368,7 @@ void World::Impl::solve_grasped(Joint& j, const Pose& simulated, double dt) {
   project_push(j, simulated, dt);
   if (!j.solved) return;
   if (j.type == JointType::Ball) {
-    // The solved rotation itself (re-deriving it from spin * dt would round).
-    const Pose p = parent_pose(j);
-    j.rotation = solve_ball_exact(j.ball, j.vertices.moments, p, simulated, j.rotation, joint_options()).rotation;
+    j.rotation = j.solved_rotation;  // the solved rotation itself (re-deriving it from spin * dt would round)
   } else {
     j.value = j.last.value;
   }
