@@ -7,6 +7,7 @@
 #include "grasp.h"
 #include "bullet_particles.h"
 #include "joint_solvers.h"
+#include "validate.h"
 
 #include <map>
 #include <memory>
@@ -183,5 +184,41 @@ struct World::Impl {
 
 uint32_t next_generation(uint32_t generation);
 uint32_t first_generation(uint32_t salt);
+
+// Slot tables with generations, shared by bodies, joints and hands.
+inline std::string stale_message(uint32_t index, uint32_t generation) {
+  return "names no live object (removed, or from another world): index " + std::to_string(index) +
+         ", generation " + std::to_string(generation);
+}
+
+template <class Slot, class IdT>
+Slot& checked_slot(std::vector<Slot>& slots, IdT id, const char* argument) {
+  if (id.is_null()) validate::fail(argument, "is the null id", Status::StaleId);
+  if (id.index >= slots.size() || slots[id.index].generation != id.generation || !slots[id.index].alive)
+    validate::fail(argument, stale_message(id.index, id.generation), Status::StaleId);
+  return slots[id.index];
+}
+
+// Takes a free slot or appends one; returns its index.
+template <class Slot>
+uint32_t allocate_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t salt) {
+  if (!free_slots.empty()) {
+    uint32_t index = free_slots.back();
+    free_slots.pop_back();
+    return index;
+  }
+  slots.emplace_back();
+  slots.back().generation = first_generation(salt);
+  return uint32_t(slots.size() - 1);
+}
+
+template <class Slot>
+void release_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t index) {
+  const uint32_t generation = next_generation(slots[index].generation);
+  slots[index] = Slot();
+  slots[index].generation = generation;
+  free_slots.push_back(index);
+}
+
 
 }  // namespace handsim

@@ -51,8 +51,9 @@ Vec3 joint_point_on_child(const Joint& j) {
   return Vec3::Zero();
 }
 
-Mat3 world_inertia(const Body& b) {
-  const Mat3 R = b.pose.orientation.toRotationMatrix();
+// The body's inertia about its centre of mass, world frame, at `orientation`.
+Mat3 world_inertia(const Body& b, const Quat& orientation) {
+  const Mat3 R = orientation.toRotationMatrix();
   return R * (b.mass * b.unit_inertia).asDiagonal() * R.transpose();
 }
 
@@ -80,12 +81,7 @@ double clamp_coordinate(double& value, double& rate, double lower, double upper)
 
 }  // namespace
 
-Joint& World::Impl::joint(JointId id, const char* argument) {
-  if (id.is_null()) validate::fail(argument, "is the null id", Status::StaleId);
-  if (id.index >= joints.size() || joints[id.index].generation != id.generation || !joints[id.index].alive)
-    validate::fail(argument, "names no live joint (removed, or from another world)", Status::StaleId);
-  return joints[id.index];
-}
+Joint& World::Impl::joint(JointId id, const char* argument) { return checked_slot(joints, id, argument); }
 const Joint& World::Impl::joint(JointId id, const char* argument) const {
   return const_cast<Impl*>(this)->joint(id, argument);
 }
@@ -171,16 +167,7 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
   read_coordinate(j, parent_pose(j), c.pose);
 
   // Everything validated: from here on the world changes.
-  const uint32_t index = [&] {
-    if (!free_joint_slots.empty()) {
-      uint32_t k = free_joint_slots.back();
-      free_joint_slots.pop_back();
-      return k;
-    }
-    joints.emplace_back();
-    joints.back().generation = first_generation(salt);
-    return uint32_t(joints.size() - 1);
-  }();
+  const uint32_t index = allocate_slot(joints, free_joint_slots, salt);
   j.generation = joints[index].generation;
   j.alive = true;
   const int parent_backend = j.parent == kWorldParent ? -1 : bodies[j.parent].backend;
@@ -273,9 +260,7 @@ void World::Impl::integrate_joints(double h) {
       // One rotational DOF: I_axis theta'' = torque of gravity about the axis - damping theta'.
       const Vec3 a = p.orientation * j.hinge.axis_parent;
       const Vec3 r = now.position - p.transform(j.hinge.pivot_parent);
-      Body moved = c;
-      moved.pose = now;
-      const double inertia = a.dot(world_inertia(moved) * a) + m * (r.squaredNorm() - std::pow(r.dot(a), 2));
+      const double inertia = a.dot(world_inertia(c, now.orientation) * a) + m * (r.squaredNorm() - std::pow(r.dot(a), 2));
       const double torque = a.dot(r.cross(m * g));
       j.rate = implicit_damped(j.rate, h * torque / inertia, h * j.damping / inertia);
       j.value += h * j.rate;
@@ -288,9 +273,7 @@ void World::Impl::integrate_joints(double h) {
     } else {
       // Three rotational DOFs about the pivot: Euler's equations with the inertia about the pivot.
       const Vec3 r = now.position - p.transform(j.ball.pivot_parent);
-      Body moved = c;
-      moved.pose = now;
-      const Mat3 inertia = world_inertia(moved) + m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+      const Mat3 inertia = world_inertia(c, now.orientation) + m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
       // Damping implicit (I + h c) w' = I w + h tau, for the same reason as implicit_damped.
       const Vec3 torque = r.cross(m * g) - j.spin.cross(inertia * j.spin);
       j.spin = (inertia + h * j.damping * Mat3::Identity()).ldlt().solve(inertia * j.spin + h * torque);
@@ -459,10 +442,7 @@ void World::remove_joint(JointId id) {
     w.backend->remove_constraint(j.constraint);
     c.soft_joint = -1;
   }
-  const uint32_t generation = next_generation(j.generation);
-  j = Joint();
-  j.generation = generation;
-  w.free_joint_slots.push_back(id.index);
+  release_slot(w.joints, w.free_joint_slots, id.index);
   w.rebuild_joint_order();
 }
 
