@@ -97,11 +97,21 @@ struct HandSlot {
   uint64_t bullet_version = 0;
 };
 
+// A face plane in body coordinates: points x on it satisfy normal . x = offset; normal points out.
+struct EntryFace {
+  int particle = -1;
+  Vec3 normal = Vec3::UnitY();
+  double offset = 0;
+};
+
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
 struct HandBodyPair {
   GraspTracker tracker;
   std::vector<ParticleContact> contacts;
   int previous_count = 0;
+  // Per touching particle (sorted by particle), the face it entered the body through: contacts of a particle
+  // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
+  std::vector<EntryFace> entry_faces, previous_faces;
 };
 
 struct World::Impl {
@@ -152,6 +162,7 @@ struct World::Impl {
   void read_soft_joint(Joint& j);
   JointSolveOptions joint_options() const;
   JointSolver solver_of(const Joint& j) const;
+  uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
 

@@ -87,6 +87,14 @@ const Joint& World::Impl::joint(JointId id, const char* argument) const {
 }
 
 // The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
+uint32_t World::Impl::group_root(uint32_t body) const {
+  for (;;) {
+    const int j = bodies[body].hard_joint >= 0 ? bodies[body].hard_joint : bodies[body].soft_joint;
+    if (j < 0 || joints[j].parent == kWorldParent) return body;
+    body = joints[j].parent;
+  }
+}
+
 JointSolver World::Impl::solver_of(const Joint& j) const {
 #if HANDSIM_WITH_CERES
   if (def.paper_pipeline) return JointSolver::LmCeres;

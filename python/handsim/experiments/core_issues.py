@@ -1,4 +1,6 @@
-"""Reproductions of the core behaviours the experiments ran into (``python -m handsim.experiments.core_issues``).
+"""Reproductions of two core faults the experiments ran into (``python -m handsim.experiments.core_issues``):
+a base thrown by the hand that holds its lid, and a lid held past its limit slammed shut. Both are fixed
+(docs/grasp.md, "Contacts keep their entry face"); tests/python/test_joints.py keeps them fixed.
 
 Each function runs one scripted, noise-free hand against the default jewelry box and returns the numbers the
 report quotes; nothing here is random.
