@@ -85,12 +85,22 @@ def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches(tmp_
     # the report and the plots are made from the same rows
     from handsim import plots
     from handsim.experiments.__main__ import report
-    text = report(rows, list(results.values()), 1, 1, 1.0, "python -m handsim.experiments --trials 1", 1)
+    check = {"trials": 1, "same_outcome": 1, "max_angle_diff_rad": 0.0, "step_ms_full": 20.0, "step_ms_lean": 0.5}
+    text = report(rows, list(results.values()), 1, check, 1.0, "python -m handsim.experiments --trials 1", 1)
+    assert "**1 of 1** ended the same" in text
     assert "## Table I" in text and "## Table II" in text and "100.0 %" in text
     assert "88.2 %" in text and "4.34 ± 1.71" in text
     plots.success_rates(rows, str(tmp_path / "s.png"))
     plots.time_kde(list(results.values()), str(tmp_path / "k.png"))
     assert (tmp_path / "s.png").stat().st_size > 1000 and (tmp_path / "k.png").stat().st_size > 1000
+
+
+def test_paper_cross_check_replays_the_same_users_with_the_full_pipeline():
+    lean = X.run_condition("paper", -0.7, 1, cells=(("close", 1),))
+    check = X.paper_cross_check(lean, 0)  # nothing replayed: nothing compared
+    assert check["trials"] == 0 and check["same_outcome"] == 0
+    full = X.run_condition("paper", -0.7, 1, cells=(("close", 1),), full_paper=True)
+    assert [(r.seed, r.success, r.grasp_begins) for r in full] == [(r.seed, r.success, r.grasp_begins) for r in lean]
 
 
 def test_kde_integrates_to_one():
@@ -102,9 +112,12 @@ def test_kde_integrates_to_one():
 
 
 def test_world_def_of_the_conditions():
-    wd = X.world_def("paper", 0.7)
+    wd = X.world_def("paper", 0.7, full_paper=True)
     assert wd.paper_pipeline and wd.particle_contacts == handsim.ParticleContacts.BULLET_OBJECTS
     assert wd.grasp.cos_threshold == 0.7
+    assert not X.world_def("paper", 0.7).paper_pipeline  # the 300-trial run: the paper's solver only
+    assert X.box_def("paper").solver == (handsim.JointSolver.LM_CERES if handsim.WITH_CERES
+                                         else handsim.JointSolver.LM)
     assert not X.world_def("exact", -0.7).paper_pipeline
     assert X.box_def("soft").model == handsim.JointModel.SOFT
     with pytest.raises(ValueError):
