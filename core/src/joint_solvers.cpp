@@ -315,19 +315,34 @@ JointSolveResult solve_hinge_lm(const HingeFrame& f, const JointVertices& v, con
   return r;
 }
 
-JointSolveResult solve_hinge(JointSolver s, const HingeFrame& f, const JointVertices& v, const Pose& parent,
-                             const Pose& simulated, double previous, const JointSolveOptions& o) {
+// One dispatch for both 1-DOF joints: the three solvers of a joint kind share one signature.
+template <class Frame, class ExactFn, class LmFn, class CeresFn>
+JointSolveResult solve_1dof(JointSolver s, ExactFn exact, LmFn lm, [[maybe_unused]] CeresFn ceres,
+                            const Frame& f, const JointVertices& v, const Pose& parent, const Pose& simulated,
+                            double previous, const JointSolveOptions& o) {
   switch (s) {
-    case JointSolver::Exact: return solve_hinge_exact(f, v.moments, parent, simulated, previous, o);
-    case JointSolver::Lm: return solve_hinge_lm(f, v, parent, simulated, previous, o);
+    case JointSolver::Exact: return exact(f, v.moments, parent, simulated, previous, o);
+    case JointSolver::Lm: return lm(f, v, parent, simulated, previous, o);
     case JointSolver::LmCeres:
 #if HANDSIM_WITH_CERES
-      return solve_hinge_lm_ceres(f, v, parent, simulated, previous, o);
+      return ceres(f, v, parent, simulated, previous, o);
 #else
       validate::fail("solver", "LmCeres needs a build with HANDSIM_WITH_CERES", Status::Unsupported);
 #endif
   }
   validate::fail("solver", "unknown joint solver " + std::to_string(int(s)));
+}
+
+#if HANDSIM_WITH_CERES
+#define HANDSIM_CERES_OR_NULL(fn) fn
+#else
+#define HANDSIM_CERES_OR_NULL(fn) nullptr
+#endif
+
+JointSolveResult solve_hinge(JointSolver s, const HingeFrame& f, const JointVertices& v, const Pose& parent,
+                             const Pose& simulated, double previous, const JointSolveOptions& o) {
+  return solve_1dof(s, solve_hinge_exact, solve_hinge_lm, HANDSIM_CERES_OR_NULL(solve_hinge_lm_ceres), f, v,
+                    parent, simulated, previous, o);
 }
 
 Pose hinge_child_pose(const HingeFrame& f, const Pose& parent, double theta) {
@@ -394,17 +409,8 @@ JointSolveResult solve_slider_lm(const SliderFrame& f, const JointVertices& v, c
 
 JointSolveResult solve_slider(JointSolver s, const SliderFrame& f, const JointVertices& v, const Pose& parent,
                               const Pose& simulated, double previous, const JointSolveOptions& o) {
-  switch (s) {
-    case JointSolver::Exact: return solve_slider_exact(f, v.moments, parent, simulated, previous, o);
-    case JointSolver::Lm: return solve_slider_lm(f, v, parent, simulated, previous, o);
-    case JointSolver::LmCeres:
-#if HANDSIM_WITH_CERES
-      return solve_slider_lm_ceres(f, v, parent, simulated, previous, o);
-#else
-      validate::fail("solver", "LmCeres needs a build with HANDSIM_WITH_CERES", Status::Unsupported);
-#endif
-  }
-  validate::fail("solver", "unknown joint solver " + std::to_string(int(s)));
+  return solve_1dof(s, solve_slider_exact, solve_slider_lm, HANDSIM_CERES_OR_NULL(solve_slider_lm_ceres), f, v,
+                    parent, simulated, previous, o);
 }
 
 Pose slider_child_pose(const SliderFrame& f, const Pose& parent, double s) {
