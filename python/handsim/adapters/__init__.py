@@ -13,3 +13,7 @@ See ``docs/input.md``.
 """
 from .skeleton import AdaptedFrame, joint_angles, untracked  # noqa: F401
 from .leap import LeapRecording, load_leap_recording, read_leap_json  # noqa: F401
+from .openxr import from_openxr, from_unity, unity_to_openxr  # noqa: F401,E402
+from .mrtk import load_mrtk_pose, read_mrtk_pose  # noqa: F401,E402
+from .mediapipe import from_mediapipe  # noqa: F401,E402
+from .bvh import hand_frames as bvh_hand_frames, load_bvh, parse_bvh, write_bvh  # noqa: F401,E402

@@ -4,8 +4,9 @@ and the glTF loader share, so that all of them orient and fill joints the same w
 * :func:`orientations` gives each joint an OpenXR frame from the positions alone (-Z along the bone towards
   the fingertip, +Y out of the back of the hand): palm and wrist -Z from the wrist towards the middle proximal
   joint and X across the knuckles (index to little on a right hand); finger bones -Z towards the next joint
-  and X the palm's X made orthogonal (the flexion axis); thumb bones -Z towards the next joint and +Y halfway
-  between the back of the hand and the thumb's side; a tip takes its distal joint's frame.
+  and X the palm's X made orthogonal (the flexion axis); thumb bones -Z towards the next joint, +Y of the
+  metacarpal halfway between the back of the hand and the thumb's side and +Y of each further thumb bone its
+  parent's +Y made orthogonal; a tip takes its distal joint's frame.
 * :func:`fill_missing` places the joints a tracker does not give: a finger metacarpal 15 % of the way from
   the wrist to its proximal joint, the palm at the middle of the middle metacarpal bone (the OpenXR
   definition), the wrist (when only the metacarpal bases are known) by the inverse of the 15 % rule.
@@ -129,7 +130,10 @@ def orientations(pos, handedness, ok=None):
         for j in joints[:-1]:
             bone = pos[j] - pos[j + 1]
             if f == "thumb":
-                attempt(j, (j, j + 1), lambda: orientation(bone, y_hint=nail))
+                # the metacarpal's back is the nail direction; each further bone takes its parent's back, so
+                # the roll stays continuous along a curled thumb
+                hint = nail if j == joints[0] or np.isnan(quats[j - 1]).any() else quat_matrix(quats[j - 1])[:, 1]
+                attempt(j, (j, j + 1), lambda: orientation(bone, y_hint=hint))
             else:
                 attempt(j, (j, j + 1), lambda: orientation(bone, x_hint=palm[:, 0]))
         tip = joints[-1]
