@@ -7,15 +7,18 @@ time), driving a right and a left hand, and placed in the scene by the placement
 recording replays as recorded (``--scene`` is then ignored) and its state hashes are checked.
 
 Placement (deterministic, from the motion alone): the whole recording is translated so that the mean palm
-position over all frames and hands lands ``HOVER`` = 5 cm above the middle of the jewelry box's closed lid front
-edge (the scene's default box). Scene ``free_box`` then puts its 4 cm cube where the hand closes: if some hand's
-Leap grab or pinch strength reaches 0.95, at the first frame that hand's strength reaches 0.5, a 2 cm cube goes to the middle between the thumb and
-index tips (a pinch: the pinch strength is the larger one) or a 4 cm cube goes under the palm, its top 5 mm
-from the palm's skin along the palm normal (a grab); the cube is then lowered in 1 mm steps, if needed, until no
-joint sphere of that hand in the last 0.1 s before the closure began (strength still below 0.05) comes within
-5 mm of it; otherwise (no closing hand) it goes under the
-first hand's mean palm, its top 1 cm above the lowest point any joint of that hand reaches, so the hand brushes
-it. The table top is moved to the cube's bottom.
+position over all frames and hands lies over the middle of the jewelry box's closed lid front edge (the scene's
+default box) and the lowest point any hand reaches (a joint centre less its radius) 1 cm below the lid's top; no rotation (a Leap's device frame already has +Y up and +Z towards the user).
+Scene ``free_box`` then puts a cube where the hand closes. The closing hand is the one whose Leap grab or pinch
+strength gets highest, if that reaches 0.95; at the first frame its strength reaches 0.5 (half closed) the cube's
+centre goes to the middle between the thumb and index tips, 1.6 cm cube (a pinch: its pinch strength is the
+larger one), or to the middle between the palm and the mean of the four fingertips, 4 cm cube (a grab). The
+cube is then lowered in 1 mm steps until the hand it is placed for, in every frame before it is a quarter closed
+(strength 0.25), clears it by 1 mm, so that only the closing hand reaches it: for a grab every particle of
+the simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules
+along its bones with the joint radii; the thumb is the anvil a pinch closes against and may rest at the cube). Without a closing hand the 4 cm cube goes under the first
+hand's mean palm, its top 1 cm above the lowest point any joint of that hand reaches, so the hand brushes it.
+The table top is moved to the cube's bottom.
 
 Writes ``<out>/<name>_<scene>.png`` (key frames and a timeline), ``<out>/<name>.txt`` (the summary) and with
 ``--save`` the recording as ``<out>/<name>_<scene>.npz``.
@@ -39,14 +42,14 @@ from . import scenes as _scenes
 from .adapters import skeleton as _sk
 
 DT = 1.0 / 60.0
-HOVER = 0.05
+DIP = 0.01
 CLOSED = 0.95
 HALF_CLOSED = 0.5
 BRUSH = 0.01
-GAP = 0.005        # grab: the cube's top this far under the palm's skin
-PINCH_HALF = 0.01  # pinch: a 2 cm cube
+PINCH_HALF = 0.008  # pinch: a 1.6 cm cube
 OPEN = 0.05        # a hand counts as open below this Leap strength
-APPROACH_S = 0.1   # the hand of this last stretch before the closure must not touch the cube
+QUARTER = 0.25     # the cube must clear the hand until it is this closed
+CLEAR = 0.001      # ... by this much
 HANDS = ("right", "left")
 
 
@@ -76,32 +79,99 @@ def motion_from_leap(leap) -> Motion:
     return Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap")
 
 
-def placement(motion: Motion) -> np.ndarray:
-    """Translation (3,) that moves the mean palm HOVER above the default lid's front edge."""
-    palms = motion.palms()
-    if len(palms) == 0:
-        raise ValueError(f"{motion.name}: no tracked hand in any frame")
-    return _default_lid_front() + np.array([0, HOVER, 0]) - palms.mean(axis=0)
-
-
-def free_box_params(motion: Motion, shift: np.ndarray) -> (dict, str):
-    """The free_box scene parameters for this motion (see the module docstring) and the rule used."""
-    h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
+def closing_hand(motion: Motion):
+    """(side, kind, strength (N,)) of the hand whose Leap grab or pinch strength gets highest, if it reaches
+    CLOSED; None otherwise (no closing hand, or no strengths)."""
     best = None
     for col, side in enumerate(HANDS):
         for kind, arr in (("grab", motion.grab), ("pinch", motion.pinch)):
             if arr is None or np.all(np.isnan(arr[:, col])):
                 continue
             m = float(np.nanmax(arr[:, col]))
-            if m >= CLOSED and (best is None or m > best[0] + 1e-12 or
-                                (abs(m - best[0]) <= 1e-12 and kind == "pinch")):
+            if m >= CLOSED and (best is None or m > best[0] + 1e-12):
                 best = (m, side, col)
-    if best is not None:
-        _, side, col = best
-        grab_max = np.nanmax(motion.grab[:, col]) if motion.grab is not None else 0
-        pinch_max = np.nanmax(motion.pinch[:, col]) if motion.pinch is not None else 0
-        pinch = pinch_max > grab_max
-        strength = (motion.pinch if pinch else motion.grab)[:, col]
+    if best is None:
+        return None
+    _, side, col = best
+    grab_max = np.nanmax(motion.grab[:, col]) if motion.grab is not None else 0
+    pinch_max = np.nanmax(motion.pinch[:, col]) if motion.pinch is not None else 0
+    kind = "pinch" if pinch_max > grab_max else "grab"
+    return side, kind, (motion.pinch if kind == "pinch" else motion.grab)[:, col]
+
+
+def closure_start(motion: Motion) -> Optional[float]:
+    """Time (s from the motion's start) the closing hand's strength last rose from below OPEN before it first
+    reached HALF_CLOSED; None without a closing hand."""
+    c = closing_hand(motion)
+    if c is None:
+        return None
+    strength = c[2]
+    k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
+    below = np.nonzero(np.nan_to_num(strength[:k], nan=0) < OPEN)[0]
+    return float(motion.times[below[-1]]) if len(below) else 0.0
+
+
+def placement(motion: Motion) -> np.ndarray:
+    """Translation (3,) of the recording into the scenes: the mean palm over the lid's front edge (x, z) and
+    the lowest point any hand reaches (a joint's centre less its radius) DIP below the lid's top face."""
+    palms = motion.palms()
+    if len(palms) == 0:
+        raise ValueError(f"{motion.name}: no tracked hand in any frame")
+    lowest = min(float(np.min(np.asarray(a.frame.positions)[np.asarray(a.frame.valid), 1]
+                              - np.asarray(a.frame.radii)[np.asarray(a.frame.valid)]))
+                 for f in motion.frames for a in f.values() if a.frame.tracked)
+    front = _default_lid_front()
+    d = _core.JewelryBoxDef()
+    lid_top = front[1] + d.lid_half_thickness
+    mean = palms.mean(axis=0)
+    return np.array([front[0] - mean[0], lid_top - DIP - lowest, front[2] - mean[2]])
+
+
+def _bone_samples(frames, fingers=("thumb",) + _sk.FINGERS, per_bone=6):
+    """Points along the bones of `fingers` (metacarpal to tip) in every frame, with radii interpolated between
+    the joints': a capsule model of those fingers."""
+    pairs = []
+    for f in fingers:
+        joints = _sk.chain(f)
+        pairs += list(zip(joints[:-1], joints[1:]))
+    a, b = np.array(pairs).T
+    t = np.linspace(0, 1, per_bone)[:, None]
+    qs, rs = [], []
+    for frame in frames:
+        p, r, v = np.asarray(frame.positions), np.asarray(frame.radii), np.asarray(frame.valid)
+        keep = v[a] & v[b]
+        pa, pb, ra, rb = p[a[keep]], p[b[keep]], r[a[keep]], r[b[keep]]
+        qs.append((pa[None] * (1 - t[..., None]) + pb[None] * t[..., None]).reshape(-1, 3))
+        rs.append((ra[None] * (1 - t) + rb[None] * t).reshape(-1))
+    if not qs:
+        return np.zeros((0, 3)), np.zeros(0)
+    return np.concatenate(qs), np.concatenate(rs)
+
+
+def _particles(frames, hand_def):
+    """Centres (M, 3) and radii (M,) of the simulated hand's particles in every one of `frames` (a World with
+    only that hand, skinned frame by frame): the volume the hand will occupy in the replay."""
+    world = _core.World(_core.WorldDef(ground=False, gravity=[0, 0, 0]))
+    hand = world.add_hand(hand_def)
+    radius = world.hand_model(hand).particle_radius
+    points = []
+    for frame in frames:
+        world.step(DT, [frame])
+        if world.hand_tracked(hand):
+            points.append(np.asarray(world.hand_particles(hand)))
+    q = np.concatenate(points) if points else np.zeros((0, 3))
+    return q, np.full(len(q), radius)
+
+
+def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict, str):
+    """The free_box scene parameters for this motion (see the module docstring) and the rule used."""
+    h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
+    closing = closing_hand(motion)
+    if closing is not None:
+        side, kind, strength = closing
+        pinch = kind == "pinch"
+        hand_def = next((d for d in (hand_defs or []) if d.handedness.name.lower() == side),
+                        _core.HandDef(handedness=_core.Handedness.RIGHT if side == "right" else _core.Handedness.LEFT))
         k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
         frame = motion.frames[k][side].frame
         p = np.asarray(frame.positions)
@@ -110,22 +180,22 @@ def free_box_params(motion: Motion, shift: np.ndarray) -> (dict, str):
             centre = 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
             where = "between the thumb and index tips"
         else:
-            out_of_palm = -_sk.quat_matrix(frame.orientations[_core.PALM])[:, 1]
-            centre = p[_core.PALM] + (float(frame.radii[_core.PALM]) + GAP + h) * out_of_palm
-            where = f"{GAP * 1000:.0f} mm under the palm"
-        # the hand as the closure begins must not touch the cube yet: lower the cube 1 mm at a time until no
-        # joint sphere of the frames of the last APPROACH_S before k0 (the last frame before k with the strength
-        # still below OPEN) comes within GAP of it
-        below = np.nonzero(np.nan_to_num(strength[:k], nan=0) < OPEN)[0]
-        k0 = int(below[-1]) if len(below) else 0
-        window = [fr for fr, t in zip(motion.frames[:k0 + 1], motion.times[:k0 + 1])
-                  if side in fr and t >= motion.times[k0] - APPROACH_S]
-        q = np.concatenate([np.asarray(fr[side].frame.positions)[np.asarray(fr[side].frame.valid)] for fr in window])
-        r = np.concatenate([np.asarray(fr[side].frame.radii)[np.asarray(fr[side].frame.valid)] for fr in window])
+            tips = p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0)
+            centre = 0.5 * (p[_core.PALM] + tips)
+            where = "between the palm and the fingertips"
+        # the hand must not touch the cube before it closes: lower the cube 1 mm at a time until the hand's
+        # particles clear it in every frame before k0, where the strength first reaches QUARTER
+        k0 = int(np.argmax(np.nan_to_num(strength, nan=-1) >= QUARTER))
+        before = [fr[side].frame for fr in motion.frames[:k0] if side in fr]
+        # a grab: no particle of the simulated hand may touch the cube early; a pinch: the index finger may not
+        # (the thumb is the anvil a pinch closes against: it may rest at the cube)
+        q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def)
+        near = (np.abs(q[:, [0, 2]] - centre[[0, 2]]) < h + r[:, None] + CLEAR).all(axis=1)
+        q, r = q[near], r[near]
         top = centre[1] + h
         for _ in range(200):
             c = np.array([centre[0], top - h, centre[2]])
-            if not (np.linalg.norm(np.maximum(np.abs(q - c) - h, 0), axis=1) - r < GAP).any():
+            if not (np.linalg.norm(np.maximum(np.abs(q - c) - h, 0), axis=1) - r < CLEAR).any():
                 break
             top -= 1e-3
         lowered = centre[1] + h - top
@@ -133,7 +203,7 @@ def free_box_params(motion: Motion, shift: np.ndarray) -> (dict, str):
         if lowered > 0:
             where += f", lowered {lowered * 1000:.0f} mm to clear the opening hand"
         rule = (f"{'pinch' if pinch else 'grab'} of the {side} hand half closed at t={motion.times[k]:.2f} s "
-                f"(frame {k}): {2 * h * 100:.0f} cm cube {where}")
+                f"(frame {k}): {2 * h * 100:.1f} cm cube {where}")
         return {"position": [float(centre[0]), float(centre[1] - h), float(centre[2])], "half_extent": h}, rule
     side = next(s for s in HANDS if any(s in f for f in motion.frames))
     palms = motion.palms(side) + shift
@@ -148,10 +218,12 @@ def free_box_params(motion: Motion, shift: np.ndarray) -> (dict, str):
 def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: Sequence = None,
                         world_def=None) -> _rec.Recording:
     """A handsim Recording of `motion` on `scene` (placement and resampling of the module docstring)."""
+    if hand_defs is None:
+        hand_defs = [_core.HandDef(handedness=_core.Handedness.RIGHT), _core.HandDef(handedness=_core.Handedness.LEFT)]
     shift = placement(motion)
     params, rule = {}, "default jewelry box"
     if scene == "free_box":
-        params, rule = free_box_params(motion, shift)
+        params, rule = free_box_params(motion, shift, hand_defs)
     elif scene != "jewelry_box":
         raise ValueError(f"scene: expected 'jewelry_box' or 'free_box' for tracker input, got {scene!r}")
     if hand_defs is None:
@@ -205,10 +277,14 @@ class Summary:
     max_shift_m: Optional[float]    # free box: largest horizontal displacement of the cube
     hash_matches: Optional[bool]
     final_hash: int
+    first_grasp_s: Optional[float] = None  # time of the first GRASP_BEGIN
+
 
     def lines(self) -> List[str]:
         out = [f"{self.name} on {self.scene}: {self.steps} steps, {self.duration_s:.2f} s",
-               f"  grasps: {self.grasps or 'none'}; held s: { {k: round(v, 2) for k, v in self.held_s.items()} or 'none'}",
+               f"  grasps: {self.grasps or 'none'}"
+               + (f" (first at {self.first_grasp_s:.2f} s)" if self.first_grasp_s is not None else "")
+               + f"; held s: { {k: round(v, 2) for k, v in self.held_s.items()} or 'none'}",
                f"  grasp ends: {self.releases} released, {self.drops} dropped (tracking lost)",
                f"  contacts begun: {self.contacts or 'none'}",
                f"  all state finite: {self.finite}"]
@@ -223,13 +299,14 @@ class Summary:
 
 
 def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, steps: Optional[int] = None,
-        motion: Optional[Motion] = None) -> Summary:
-    """Replays `rec`, collects the summary and (with `picture`) writes the PNG."""
+        motion: Optional[Motion] = None, store: Optional[dict] = None) -> Summary:
+    """Replays `rec` (its first `steps` only, if given), collects the summary and (with `picture`) writes the
+    PNG. With `store` (a dict), also leaves the timeline ("trace") and the key frames ("snaps") there."""
     names = {}
     trace = {"t": [], "lid": [], "lift": [], "grasped": []}
     snaps = []
     state = {"finite": True, "viol": 0.0, "lid": -1e9, "lift": 0.0, "shift": 0.0, "start": None}
-    counts = {"grasps": {}, "contacts": {}, "drops": 0, "releases": 0, "held": {}}
+    counts = {"grasps": {}, "contacts": {}, "drops": 0, "releases": 0, "held": {}, "first": None}
     n_total = rec.steps if steps is None else min(steps, rec.steps)
     keys = set(np.linspace(0, n_total - 1, 4).round().astype(int).tolist())
 
@@ -245,6 +322,8 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
             label = names.get(e.body, "?")
             if e.type == _core.EventType.GRASP_BEGIN:
                 counts["grasps"][label] = counts["grasps"].get(label, 0) + 1
+                if counts["first"] is None:
+                    counts["first"] = world.time
             elif e.type == _core.EventType.CONTACT_BEGIN:
                 counts["contacts"][label] = counts["contacts"].get(label, 0) + 1
             elif e.type == _core.EventType.GRASP_END:
@@ -270,7 +349,7 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
             state["lift"] = max(state["lift"], lift)
             state["shift"] = max(state["shift"], float(np.hypot(*(p[[0, 2]] - state["start"][[0, 2]]))))
             trace["lift"].append(100 * lift)
-        if picture is not None and i in keys:
+        if (picture is not None or store is not None) and i in keys:
             bodies = {k: v for k, v in scene.objects.items() if isinstance(v, _core.BodyId) and k != "table"}
             snaps.append(_render.snapshot(world, bodies, f"t={world.time:.2f} s" + ("  grasped" if grasped else "")))
 
@@ -281,9 +360,11 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
                       state["lid"] if jewelry else None, state["viol"] if jewelry else None,
                       state["lift"] if rec.scene == "free_box" else None,
                       state["shift"] if rec.scene == "free_box" else None,
-                      None if rec.hashes is None else result.matches, result.final_hash)
+                      None if rec.hashes is None else result.matches, result.final_hash, counts["first"])
     if picture is not None:
         _picture(picture, rec, summary, snaps, trace, motion)
+    if store is not None:
+        store.update(trace=trace, snaps=snaps)
     return summary
 
 
