@@ -305,20 +305,25 @@ class ReplayResult:
 def replay(rec: Recording, on_step: Callable = None, steps: Optional[int] = None) -> ReplayResult:
     """Rebuilds the recording's world and steps it through the recorded inputs (the first `steps` only, if
     given). ``on_step(i, world, scene)`` is called after every step. Compares each step's state_hash with the
-    recorded one when the recording has them."""
+    recorded one when the recording has them; a recording without them (made from tracker input) gets them
+    from a full replay, so that it can be saved and checked later."""
     check(rec)
     world, scene = build_world(rec)
     edits = sorted(rec.edits, key=lambda e: e["step"])  # stable: same-step edits keep their order
     k = 0
     mismatch = None
     n = rec.steps if steps is None else min(int(steps), rec.steps)
+    hashes = np.zeros(n, np.uint64)
     for i in range(n):
         while k < len(edits) and edits[k]["step"] == i:
             apply_edit(world, scene, edits[k])
             k += 1
         world.step(float(rec.dt[i]), rec.frames(i))
+        hashes[i] = world.state_hash()
         if rec.hashes is not None and mismatch is None and int(rec.hashes[i]) != world.state_hash():
             mismatch = i
         if on_step is not None:
             on_step(i, world, scene)
+    if rec.hashes is None and n == rec.steps:
+        rec.hashes = hashes
     return ReplayResult(world, scene, n, world.state_hash(), mismatch)
