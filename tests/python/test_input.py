@@ -527,8 +527,14 @@ def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings)
     assert jewelry.max_hinge_violation_m <= 1e-6 and -0.5 <= jewelry.max_lid_deg <= 90.5
     if steps is None:
         checks = input_report.expectations(motion, jewelry, free)
-        if name == "three-claps":
-            # known: the two hands clapping over the cube and the lid squeeze them (docs/input.md)
-            assert not checks["no grasp of the cube"]
-            checks = {k: v for k, v in checks.items() if not k.startswith("no grasp")}
-        assert all(checks.values()), checks
+        missed = {k for k, ok in checks.items() if not ok}
+        # docs/input.md, "Shortfalls": the recorded grabs of these two files close in the air above the cube
+        # without the opposing contacts of a grasp; the clapping hand's fingertips dig into the cube's top and
+        # the deep contacts read as a grasp. Any other miss, or one of these turning into a pass, fails here
+        # so that the doc gets updated.
+        assert missed == KNOWN_MISSES.get(name, set()), checks
+
+
+KNOWN_MISSES = {"grab": {"cube grasped", "not before the closure"},
+                "confidence2": {"cube grasped", "not before the closure"},
+                "three-claps": {"no grasp of the cube", "no grasp of the lid"}}

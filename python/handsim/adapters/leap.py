@@ -20,8 +20,8 @@ a Y-up scene with the user at +Z, as in handsim):
 
 Older frames (formatVersion 0.1/1) lack ``carpPosition`` and ``btipPosition``. They are rebuilt with Leap's
 own hand model, whose proportions are fixed (measured on the formatVersion 2 recording, constant in every
-frame): the fingertip end lies 1.299 times as far from the dip joint as ``tipPosition``; the middle
-metacarpal is 1.447 times as long as the middle proximal bone and points along
+frame): the fingertip end lies 1.2987 times as far from the dip joint as ``tipPosition``; the middle
+metacarpal is 1.4475 times as long as the middle proximal bone and points along
 0.9885 ``direction`` + 0.1483 ``palmNormal`` ± 0.0295 (``direction`` x ``palmNormal``) (+ for a right hand);
 the other metacarpal bases follow from the wrist by the 15 % rule. Those joints are reported as synthesized.
 Joint orientations are built from the positions (:func:`handsim.adapters.skeleton.orientations`).
@@ -41,8 +41,8 @@ from . import skeleton
 from .lzstring import decompress_from_base64
 
 MM = 0.001
-TIP_EXTENSION = 1.299
-MIDDLE_METACARPAL_PER_PROXIMAL = 1.447
+TIP_EXTENSION = 1.2987
+MIDDLE_METACARPAL_PER_PROXIMAL = 1.4475
 METACARPAL_DIRECTION = (0.9885, 0.1483, 0.0295)  # in (direction, palmNormal, direction x palmNormal), right hand
 SUPPORTED_FORMATS = (0.1, 1, 2)
 _J = skeleton.JOINT
@@ -209,3 +209,36 @@ def load_leap_recording(path) -> LeapRecording:
     except json.JSONDecodeError as e:
         raise ValueError(f"path ({p.name}): not JSON after decompression: {e}") from None
     return read_leap_json(doc, p.name.split(".")[0])
+
+
+def measure_hand_model(path) -> dict:
+    """The proportions of Leap's hand model that :func:`leap_hand_frame` uses for older frames, measured on a
+    formatVersion 2 recording (mean and spread over every hand of every frame)."""
+    text = Path(path).read_text().strip()
+    doc = json.loads(text if text.startswith("{") else decompress_from_base64(text, "path"))
+    if doc.get("metadata", {}).get("formatVersion") != 2:
+        raise ValueError("path: the hand model is measured on a formatVersion 2 recording (it has carp/btip)")
+    rows = {"tip_extension": [], "middle_metacarpal_per_proximal": [], "metacarpal_direction": [],
+            "palm_offset_mm": []}
+    for fr in _unpack_v2(doc["frames"]):
+        for hand in fr["hands"]:
+            fingers = {p["type"]: p for p in fr["pointables"] if p["handId"] == hand["id"]}
+            v = lambda t, k: np.asarray(fingers[t][k], float)
+            for t in range(5):
+                rows["tip_extension"].append(np.linalg.norm(v(t, "btipPosition") - v(t, "dipPosition")) /
+                                             np.linalg.norm(v(t, "tipPosition") - v(t, "dipPosition")))
+            meta = v(2, "mcpPosition") - v(2, "carpPosition")
+            rows["middle_metacarpal_per_proximal"].append(
+                np.linalg.norm(meta) / np.linalg.norm(v(2, "pipPosition") - v(2, "mcpPosition")))
+            d, n = np.asarray(hand["direction"], float), np.asarray(hand["palmNormal"], float)
+            u = meta / np.linalg.norm(meta)
+            rows["metacarpal_direction"].append([u @ d, u @ n, u @ np.cross(d, n)])
+            palm = 0.5 * (v(2, "mcpPosition") + v(2, "carpPosition"))
+            rows["palm_offset_mm"].append(np.linalg.norm(palm - np.asarray(hand["palmPosition"], float)))
+    return {k: (np.mean(r, axis=0).round(4).tolist(), float(np.std(r, axis=0).max())) for k, r in rows.items()}
+
+
+if __name__ == "__main__":
+    import sys
+    for key, (mean, spread) in measure_hand_model(sys.argv[1]).items():
+        print(f"{key}: {mean} (largest standard deviation {spread:.1e})")

@@ -63,8 +63,13 @@ def decompress_from_base64(text: str, argument: str = "text") -> str:
     dictionary = ["\x00", "\x01", "\x02", w]  # codes 0..2 are control codes
     result = [w]
     num_bits, enlarge_in = 3, 4
+    mask = (1 << num_bits) - 1
     while True:
-        code = read(num_bits)
+        # read(num_bits), inlined: this loop runs once per code
+        if pos + num_bits > nbits:
+            read(num_bits)  # raises the truncation error
+        code = window[pos] & mask
+        pos += num_bits
         if code < 2:
             dictionary.append(chr(read(8 if code == 0 else 16)))
             code = len(dictionary) - 1
@@ -74,7 +79,8 @@ def decompress_from_base64(text: str, argument: str = "text") -> str:
         if enlarge_in == 0:
             enlarge_in = 1 << num_bits
             num_bits += 1
-        if code < len(dictionary) and code > 2:
+            mask = (1 << num_bits) - 1
+        if 2 < code < len(dictionary):
             entry = dictionary[code]
         elif code == len(dictionary):
             entry = w + w[0]
@@ -87,3 +93,4 @@ def decompress_from_base64(text: str, argument: str = "text") -> str:
         if enlarge_in == 0:
             enlarge_in = 1 << num_bits
             num_bits += 1
+            mask = (1 << num_bits) - 1
