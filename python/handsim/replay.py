@@ -2,13 +2,14 @@
 
 FILE is a handsim recording (``.npz``, :mod:`handsim.recording`), a Leap Motion recording (``.json.lz`` /
 ``.json`` of leapjs-playback) or a BVH file (``.bvh``). Leap and BVH input is first turned into a recording
-(:func:`session_from_frames`): resampled to 60 Hz (each step takes the newest tracker frame at or before its
+(:func:`session_from_motion`): resampled to 60 Hz (each step takes the newest tracker frame at or before its
 time), driving a right and a left hand, and placed in the scene by the placement rule below. A handsim
 recording replays as recorded (``--scene`` is then ignored) and its state hashes are checked.
 
 Placement (deterministic, from the motion alone): the whole recording is translated so that the mean palm
 position over all frames and hands lies over the middle of the jewelry box's closed lid front edge (the scene's
-default box) and the lowest point any hand reaches (a joint centre less its radius) 1 cm below the lid's top; no rotation (a Leap's device frame already has +Y up and +Z towards the user).
+default box) and the lowest point any hand reaches (a joint centre less its radius) 1 cm below the lid's top;
+no rotation (a Leap's device frame already has +Y up and +Z towards the user).
 Scene ``free_box`` then puts a cube where the hand closes. The closing hand is the one whose Leap grab or pinch
 strength gets highest, if that reaches 0.95; at the first frame its strength reaches 0.5 (half closed) the cube's
 centre goes to the middle between the thumb and index tips, 1.6 cm cube (a pinch: its pinch strength is the
@@ -16,9 +17,9 @@ larger one), or to the middle between the palm and the mean of the four fingerti
 cube is then lowered in 1 mm steps until the hand it is placed for, in every frame before it is a quarter closed
 (strength 0.25), clears it by 1 mm, so that only the closing hand reaches it: for a grab every particle of
 the simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules
-along its bones with the joint radii; the thumb is the anvil a pinch closes against and may rest at the cube). Without a closing hand the 4 cm cube goes under the first
-hand's mean palm, its top 1 cm above the lowest point any joint of that hand reaches, so the hand brushes it.
-The table top is moved to the cube's bottom.
+along its bones with the joint radii; the thumb is the anvil a pinch closes against and may rest at the cube).
+Without a closing hand the 4 cm cube goes under the first hand's mean palm, its top 1 cm above the lowest point any joint of
+that hand reaches, so the hand brushes it. The table top is moved to the cube's bottom.
 
 Writes ``<out>/<name>_<scene>.png`` (key frames and a timeline), ``<out>/<name>.txt`` (the summary) and with
 ``--save`` the recording as ``<out>/<name>_<scene>.npz``.
