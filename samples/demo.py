@@ -13,31 +13,12 @@ import time
 import numpy as np
 
 import handsim
-from handsim import experiments, users
-
-
-def box_corners(pose, half):
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
-    return np.array([pose[:3] + users.quat_rotate(pose[3:], s * half) for s in signs])
-
-
-EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
+from handsim import experiments, render, users
 
 
 def draw(ax, snap, title):
-    # side view from the left: horizontal = world Z (the user at the right), vertical = world Y
-    for corners, colour in ((snap["base"], "saddlebrown"), (snap["lid"], "darkgoldenrod")):
-        for a, b in EDGES:
-            ax.plot([corners[a, 2], corners[b, 2]], [corners[a, 1], corners[b, 1]], color=colour, lw=1.2)
-    for pts, colour in zip(snap["hands"], ("tab:blue", "tab:red")):
-        if pts is not None:
-            ax.scatter(pts[:, 2], pts[:, 1], s=0.6, color=colour, alpha=0.5, linewidths=0)
-    ax.set_xlim(-0.62, -0.02)
-    ax.set_ylim(0.72, 1.12)
-    ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    ax.set_title(title, fontsize=8)
+    """Side view from the left (world Z to the right, the user at the right; Y up)."""
+    render.draw(ax, {**snap, "title": title}, centre=(0, 0.92, -0.32), half_width=0.3, axes=(2, 1))
 
 
 def main(out_dir="out/demo"):
@@ -81,8 +62,8 @@ def main(out_dir="out/demo"):
                 e = np.asarray(box.definition.base_half_extents, float)
                 lid_half = np.array([e[0], box.definition.lid_half_thickness, e[2] + 0.5 * box.definition.lid_overhang])
                 snaps.append({"t": record["t"][-1], "angle": record["angle"][-1],
-                              "base": box_corners(np.asarray(world.body_pose(box.base)), e),
-                              "lid": box_corners(np.asarray(world.body_pose(box.lid)), lid_half),
+                              "boxes": [("base", render.box_corners(world.body_pose(box.base), e)),
+                                        ("lid", render.box_corners(world.body_pose(box.lid), lid_half))],
                               "hands": [np.asarray(world.hand_particles(h, True)) if world.hand_tracked(h) else None
                                         for h in (bench.right, bench.left)],
                               "task": task})

@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _core
+from .adapters import skeleton as _skeleton
 
 __all__ = ["load_gltf_hand", "openxr_joint"]
 
@@ -152,49 +153,9 @@ class _Reader:
         return self._global[index]
 
 
-def _quat_matrix(q):
-    x, y, z, w = q / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def _matrix_quat(m):
-    """x, y, z, w of a rotation matrix (Shepperd's method, stable for every rotation)."""
-    t = np.trace(m)
-    if t > 0:
-        s = 2 * np.sqrt(t + 1)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2 * np.sqrt(1 + m[i, i] - m[j, j] - m[k, k])
-        q = [0.0] * 4
-        q[i] = s / 4
-        q[j] = (m[j, i] + m[i, j]) / s
-        q[k] = (m[k, i] + m[i, k]) / s
-        q[3] = (m[k, j] - m[j, k]) / s
-    q = np.array(q)
-    return q / np.linalg.norm(q)
-
-
-def _unit(v, what):
-    n = np.linalg.norm(v)
-    if not n > 1e-9:
-        raise ValueError(f"cannot orient {what}: its joints coincide")
-    return v / n
-
-
-def _orientation(z, x_hint=None, y_hint=None):
-    """OpenXR frame with +Z along z and X (or Y) as close as possible to the hint."""
-    z = _unit(z, "a bone")
-    if x_hint is not None:
-        x = _unit(x_hint - x_hint.dot(z) * z, "a bone (parallel to its flexion axis)")
-        y = np.cross(z, x)
-    else:
-        y = _unit(y_hint - y_hint.dot(z) * z, "a bone (parallel to its back direction)")
-        x = np.cross(y, z)
-    return _matrix_quat(np.column_stack([x, y, z]))
+_quat_matrix = _skeleton.quat_matrix
+_unit = _skeleton.unit
+_orientation = _skeleton.orientation
 
 
 def _skin_node(gltf):
@@ -322,22 +283,7 @@ def _synthesize_positions(pos, have, vertices, dominant):
 
 
 def _orientations(pos, handedness):
-    quats = np.zeros((_core.JOINT_COUNT, 4))
-    along = pos[_core.MIDDLE_PROXIMAL] - pos[_core.WRIST]
-    across = pos[_core.LITTLE_PROXIMAL] - pos[_core.INDEX_PROXIMAL]
-    if handedness == _core.Handedness.LEFT:
-        across = -across
-    quats[_core.PALM] = quats[_core.WRIST] = _orientation(-along, x_hint=across)
-    palm = _quat_matrix(quats[_core.PALM])
-    thumb_side = -palm[:, 0] if handedness == _core.Handedness.RIGHT else palm[:, 0]
-    nail = palm[:, 1] + thumb_side
-    for f in ("thumb",) + _FINGERS:
-        first, tip = (_core.THUMB_METACARPAL if f == "thumb" else _JOINT[f + "_metacarpal"]), _JOINT[f + "_tip"]
-        for j in range(first, tip):
-            bone = pos[j] - pos[j + 1]
-            quats[j] = _orientation(bone, y_hint=nail) if f == "thumb" else _orientation(bone, x_hint=palm[:, 0])
-        quats[tip] = quats[tip - 1]
-    return quats
+    return _skeleton.orientations(pos, handedness)
 
 
 def _radii(pos, quats, vertices, dominant):

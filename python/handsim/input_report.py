@@ -1,0 +1,163 @@
+"""Replays every Leap recording of a folder near the jewelry box and a free cube and writes the results of
+``docs/input.md``: ``python -m handsim.input_report [--assets DIR] [--doc docs/input.md] [--img docs/img]``.
+
+For each recording it runs :func:`handsim.replay.session_from_motion` on both scenes (60 Hz, the placement
+rule of :mod:`handsim.replay`), checks the expectations of :func:`expectations`, draws one PNG (key frames of
+both scenes and a timeline) and rewrites the table between the ``<!-- results -->`` markers of the doc.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Dict, List
+
+import numpy as np
+
+from . import render as _render
+from . import replay as _replay
+from .adapters.leap import load_leap_recording
+
+BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
+HINGE_TOLERANCE_M = 1e-6
+
+
+def default_assets() -> Path:
+    """``<repo>/../shared/assets/leap_recordings`` (the folder may be absent)."""
+    return Path(__file__).resolve().parents[3] / "shared" / "assets" / "leap_recordings"
+
+
+def expectations(motion: "_replay.Motion", jewelry: "_replay.Summary", free: "_replay.Summary") -> Dict[str, bool]:
+    """What a person watching the recording would expect, as named checks (all must be True):
+
+    * always: every body pose finite; the hinge holds (violation <= 1e-6 m) and the lid stays within its
+      0..90 deg limits;
+    * a recording with a closing hand (Leap grab or pinch strength >= 0.95): the cube is grasped at least once,
+      and not before the hand began to close;
+    * a recording without one: nothing is grasped, neither the cube (which the hand brushes) nor the lid."""
+    out = {"finite": jewelry.finite and free.finite,
+           "hinge holds": jewelry.max_hinge_violation_m <= HINGE_TOLERANCE_M,
+           "lid within limits": -0.5 <= jewelry.max_lid_deg <= 90.5}
+    start = _replay.closure_start(motion)
+    if start is not None:
+        out["cube grasped"] = free.grasps.get("box", 0) >= 1
+        out["not before the closure"] = free.first_grasp_s is not None and free.first_grasp_s >= start
+    else:
+        out["no grasp of the cube"] = not free.grasps
+        out["no grasp of the lid"] = not jewelry.grasps
+    return out
+
+
+def _figure(path: Path, name: str, motion, runs):
+    plt = _render.pyplot()
+    fig = plt.figure(figsize=(12, 7.2))
+    grid = fig.add_gridspec(3, 4, height_ratios=[1, 1, 1])
+    for row, (rec, summary, store) in enumerate(runs):
+        if rec.scene == "jewelry_box":
+            centre, axes = _replay._default_lid_front() + [0, 0.04, -0.05], (2, 1)
+        else:
+            centre, axes = np.asarray(rec.scene_params["position"], float) + [0, 0.05, 0], (0, 1)
+        for k, snap in enumerate(store["snaps"][:4]):
+            ax = fig.add_subplot(grid[row, k])
+            _render.draw(ax, snap, centre, half_width=0.16, axes=axes)
+            if k == 0:
+                ax.set_ylabel("jewelry box, side" if rec.scene == "jewelry_box" else "free cube, front", fontsize=8)
+    ax = fig.add_subplot(grid[2, :])
+    (jrec, jsum, jstore), (frec, fsum, fstore) = runs
+    t = np.asarray(jstore["trace"]["t"])
+    ax.plot(t, jstore["trace"]["lid"], color="darkgoldenrod", label="lid angle (deg)")
+    tf = np.asarray(fstore["trace"]["t"])
+    ax.plot(tf, 10 * np.asarray(fstore["trace"]["lift"]), color="tab:green", label="cube lift (mm)")
+    for store, colour, label in ((jstore, "darkgoldenrod", "lid grasped"), (fstore, "tab:green", "cube grasped")):
+        g = np.asarray(store["trace"]["grasped"], bool)
+        tt = np.asarray(store["trace"]["t"])
+        if g.any():
+            ax.fill_between(tt, 0, 1, where=g, transform=ax.get_xaxis_transform(), color=colour, alpha=0.15,
+                            label=label)
+    ax2 = ax.twinx()
+    for col, side, colour in ((0, "right", "tab:blue"), (1, "left", "tab:red")):
+        if motion.grab is not None and not np.all(np.isnan(motion.grab[:, col])):
+            ax2.plot(motion.times, motion.grab[:, col], ":", color=colour, lw=1, label=f"Leap grab, {side}")
+            ax2.plot(motion.times, motion.pinch[:, col], "--", color=colour, lw=0.8, label=f"Leap pinch, {side}")
+    ax2.set_ylim(-0.05, 1.05)
+    ax2.set_ylabel("Leap strength", fontsize=8)
+    ax2.legend(fontsize=7, loc="upper right")
+    ax.set_xlabel("time (s)")
+    ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle(f"{name}: blue right hand, red left; key frames at 0, 1/3, 2/3 and the end", fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=72)
+    plt.close(fig)
+
+
+def run_all(assets: Path, img: Path = None) -> List[dict]:
+    rows = []
+    for path in sorted(assets.glob("*.json.lz")):
+        name = path.name.split(".")[0]
+        c0 = time.process_time()
+        leap = load_leap_recording(path)
+        motion = _replay.motion_from_leap(leap)
+        runs = []
+        for scene in ("jewelry_box", "free_box"):
+            rec = _replay.session_from_motion(motion, scene)
+            store = {}
+            summary = _replay.run(rec, name, motion=motion, store=store)
+            runs.append((rec, summary, store))
+        if img is not None:
+            _figure(img / f"input_{name}.png", name, motion, runs)
+        checks = expectations(motion, runs[0][1], runs[1][1])
+        rows.append({"name": name, "leap": leap, "motion": motion, "jewelry": runs[0][1], "free": runs[1][1],
+                     "placement": runs[1][0].info["placement"], "checks": checks,
+                     "cpu_s": time.process_time() - c0})
+    return rows
+
+
+def table(rows) -> str:
+    out = ["| recording | fmt | frames | s | hands | Leap grab / pinch max | jewelry box: grasps, lid max, hinge "
+           "violation max | free cube: placement | free cube: grasps (first at), held, lift | expectations |",
+           "|---|---|---:|---:|---|---|---|---|---|---|"]
+    for r in rows:
+        leap, j, f = r["leap"], r["jewelry"], r["free"]
+        hands = ", ".join(f"{k}:{v}" for k, v in sorted(leap.hand_counts().items()))
+        gp = " / ".join(f"{np.nanmax(a):.2f}" if not np.all(np.isnan(a)) else "–" for a in (leap.grab, leap.pinch))
+        jg = ", ".join(f"{k} {v}" for k, v in sorted(j.grasps.items())) or "none"
+        fg = (f"{f.grasps.get('box', 0)} ({f.first_grasp_s:.2f} s)" if f.grasps else "none")
+        held = f.held_s.get("box", 0.0)
+        failed = [k for k, ok in r["checks"].items() if not ok]
+        verdict = "all met" if not failed else "NOT MET: " + ", ".join(failed)
+        out.append(f"| {r['name']} | {leap.format_version} | {len(leap.frames)} | {leap.times[-1]:.2f} | {hands} | "
+                   f"{gp} | {jg}; {j.max_lid_deg:.1f}°; {j.max_hinge_violation_m:.1e} m | {r['placement']} | "
+                   f"{fg}; {held:.2f} s; {f.max_lift_m * 1000:.0f} mm | {verdict} |")
+    return "\n".join(out)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m handsim.input_report", description=__doc__.split("\n\n")[0])
+    ap.add_argument("--assets", type=Path, default=default_assets(), help="folder of .json.lz recordings")
+    ap.add_argument("--doc", type=Path, default=Path("docs/input.md"), help="doc whose results table to rewrite")
+    ap.add_argument("--img", type=Path, default=Path("docs/img"), help="folder for the PNGs")
+    args = ap.parse_args(argv)
+    if not args.assets.is_dir() or not list(args.assets.glob("*.json.lz")):
+        print(f"error: --assets: no .json.lz recordings in {args.assets}", file=sys.stderr)
+        return 2
+    c0 = time.perf_counter()
+    rows = run_all(args.assets, args.img)
+    text = table(rows) + "\n\nPictures: " + ", ".join(f"[{r['name']}](img/input_{r['name']}.png)" for r in rows)
+    text += (f"\n\n{len(rows)} recordings, {sum(len(r['checks']) for r in rows)} checks, "
+             f"{sum(not ok for r in rows for ok in r['checks'].values())} not met; "
+             f"{time.perf_counter() - c0:.0f} s wall for the whole run.")
+    print(text)
+    if args.doc.is_file():
+        doc = args.doc.read_text()
+        if BEGIN in doc and END in doc:
+            a, b = doc.index(BEGIN) + len(BEGIN), doc.index(END)
+            args.doc.write_text(doc[:a] + "\n" + text + "\n" + doc[b:])
+            print(f"rewrote the results of {args.doc}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,464 @@
+"""Replay hand input on a scene and report what happened: ``python -m handsim.replay FILE [options]``.
+
+FILE is a handsim recording (``.npz``, :mod:`handsim.recording`), a Leap Motion recording (``.json.lz`` /
+``.json`` of leapjs-playback) or a BVH file (``.bvh``). Leap and BVH input is first turned into a recording
+(:func:`session_from_motion`): resampled to 60 Hz (each step takes the newest tracker frame at or before its
+time), driving a right and a left hand, and placed in the scene by the placement rule below. A handsim
+recording replays as recorded (``--scene`` is then ignored) and its state hashes are checked.
+
+Placement (deterministic, from the motion alone): the whole recording is translated so that the mean palm
+position over all frames and hands lies over the middle of the jewelry box's closed lid front edge (the scene's
+default box) and the lowest point any hand reaches (a joint centre less its radius) 1 cm below the lid's top;
+no rotation (a Leap's device frame already has +Y up and +Z towards the user).
+Scene ``free_box`` then puts a cube where the hand closes. The closing hand is the one whose Leap grab or pinch
+strength gets highest, if that reaches 0.95; at the first frame its strength reaches 0.5 (half closed) the cube's
+centre goes to the middle between the thumb and index tips, 1.6 cm cube (a pinch: its pinch strength is the
+larger one), or to the middle between the palm and the mean of the four fingertips, 4 cm cube (a grab). The
+cube is then lowered in 1 mm steps until the hand it is placed for, in every frame before it is a quarter closed
+(strength 0.25), clears it by 1 mm, so that only the closing hand reaches it: for a grab every particle of
+the simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules
+along its bones with the joint radii; the thumb is the anvil a pinch closes against and may rest at the cube).
+Without a closing hand the 4 cm cube goes under the first hand's mean palm, its top 1 cm above the lowest point any joint of
+that hand reaches, so the hand brushes it. The table top is moved to the cube's bottom.
+
+Writes ``<out>/<name>_<scene>.png`` (key frames and a timeline), ``<out>/<name>.txt`` (the summary) and with
+``--save`` the recording as ``<out>/<name>_<scene>.npz``.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from . import _core
+from . import recording as _rec
+from . import render as _render
+from . import scenes as _scenes
+from .adapters import skeleton as _sk
+
+DT = 1.0 / 60.0
+DIP = 0.01
+CLOSED = 0.95
+HALF_CLOSED = 0.5
+BRUSH = 0.01
+PINCH_HALF = 0.008  # pinch: a 1.6 cm cube
+OPEN = 0.05        # a hand counts as open below this Leap strength
+QUARTER = 0.25     # the cube must clear the hand until it is this closed
+CLEAR = 0.001      # ... by this much
+HANDS = ("right", "left")
+
+
+def _default_lid_front():
+    w = _core.World()
+    box = _core.build_jewelry_box(w)
+    return np.asarray(box.lid_front(w), float)
+
+
+@dataclasses.dataclass
+class Motion:
+    """Tracker-neutral input: times (N,) s and per frame {"right"/"left": AdaptedFrame}; closure (N, 2) of
+    [right, left] with grab/pinch strengths when the tracker gives them (NaN otherwise)."""
+    name: str
+    times: np.ndarray
+    frames: List[Dict[str, _sk.AdaptedFrame]]
+    grab: Optional[np.ndarray] = None
+    pinch: Optional[np.ndarray] = None
+    source: str = ""
+
+    def palms(self, side=None):
+        return np.array([f[s].frame.palm_pose[:3] for f in self.frames for s in HANDS
+                         if s in f and (side is None or s == side) and f[s].frame.tracked])
+
+
+def motion_from_leap(leap) -> Motion:
+    return Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap")
+
+
+def closing_hand(motion: Motion):
+    """(side, kind, strength (N,)) of the hand whose Leap grab or pinch strength gets highest, if it reaches
+    CLOSED; None otherwise (no closing hand, or no strengths)."""
+    best = None
+    for col, side in enumerate(HANDS):
+        for kind, arr in (("grab", motion.grab), ("pinch", motion.pinch)):
+            if arr is None or np.all(np.isnan(arr[:, col])):
+                continue
+            m = float(np.nanmax(arr[:, col]))
+            if m >= CLOSED and (best is None or m > best[0] + 1e-12):
+                best = (m, side, col)
+    if best is None:
+        return None
+    _, side, col = best
+    grab_max = np.nanmax(motion.grab[:, col]) if motion.grab is not None else 0
+    pinch_max = np.nanmax(motion.pinch[:, col]) if motion.pinch is not None else 0
+    kind = "pinch" if pinch_max > grab_max else "grab"
+    return side, kind, (motion.pinch if kind == "pinch" else motion.grab)[:, col]
+
+
+def closure_start(motion: Motion) -> Optional[float]:
+    """Time (s from the motion's start) the closing hand's strength last rose from below OPEN before it first
+    reached HALF_CLOSED; None without a closing hand."""
+    c = closing_hand(motion)
+    if c is None:
+        return None
+    strength = c[2]
+    k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
+    below = np.nonzero(np.nan_to_num(strength[:k], nan=0) < OPEN)[0]
+    return float(motion.times[below[-1]]) if len(below) else 0.0
+
+
+def placement(motion: Motion) -> np.ndarray:
+    """Translation (3,) of the recording into the scenes: the mean palm over the lid's front edge (x, z) and
+    the lowest point any hand reaches (a joint's centre less its radius) DIP below the lid's top face."""
+    palms = motion.palms()
+    if len(palms) == 0:
+        raise ValueError(f"{motion.name}: no tracked hand in any frame")
+    lowest = min(float(np.min(np.asarray(a.frame.positions)[np.asarray(a.frame.valid), 1]
+                              - np.asarray(a.frame.radii)[np.asarray(a.frame.valid)]))
+                 for f in motion.frames for a in f.values() if a.frame.tracked)
+    front = _default_lid_front()
+    d = _core.JewelryBoxDef()
+    lid_top = front[1] + d.lid_half_thickness
+    mean = palms.mean(axis=0)
+    return np.array([front[0] - mean[0], lid_top - DIP - lowest, front[2] - mean[2]])
+
+
+def _bone_samples(frames, fingers=("thumb",) + _sk.FINGERS, per_bone=6):
+    """Points along the bones of `fingers` (metacarpal to tip) in every frame, with radii interpolated between
+    the joints': a capsule model of those fingers."""
+    pairs = []
+    for f in fingers:
+        joints = _sk.chain(f)
+        pairs += list(zip(joints[:-1], joints[1:]))
+    a, b = np.array(pairs).T
+    t = np.linspace(0, 1, per_bone)[:, None]
+    qs, rs = [], []
+    for frame in frames:
+        p, r, v = np.asarray(frame.positions), np.asarray(frame.radii), np.asarray(frame.valid)
+        keep = v[a] & v[b]
+        pa, pb, ra, rb = p[a[keep]], p[b[keep]], r[a[keep]], r[b[keep]]
+        qs.append((pa[None] * (1 - t[..., None]) + pb[None] * t[..., None]).reshape(-1, 3))
+        rs.append((ra[None] * (1 - t) + rb[None] * t).reshape(-1))
+    if not qs:
+        return np.zeros((0, 3)), np.zeros(0)
+    return np.concatenate(qs), np.concatenate(rs)
+
+
+def _particles(frames, hand_def):
+    """Centres (M, 3) and radii (M,) of the simulated hand's particles in every one of `frames` (a World with
+    only that hand, skinned frame by frame): the volume the hand will occupy in the replay."""
+    world = _core.World(_core.WorldDef(ground=False, gravity=[0, 0, 0]))
+    hand = world.add_hand(hand_def)
+    radius = world.hand_model(hand).particle_radius
+    points = []
+    for frame in frames:
+        world.step(DT, [frame])
+        if world.hand_tracked(hand):
+            points.append(np.asarray(world.hand_particles(hand)))
+    q = np.concatenate(points) if points else np.zeros((0, 3))
+    return q, np.full(len(q), radius)
+
+
+def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict, str):
+    """The free_box scene parameters for this motion (see the module docstring) and the rule used."""
+    h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
+    closing = closing_hand(motion)
+    if closing is not None:
+        side, kind, strength = closing
+        pinch = kind == "pinch"
+        hand_def = next((d for d in (hand_defs or []) if d.handedness.name.lower() == side),
+                        _core.HandDef(handedness=_core.Handedness.RIGHT if side == "right" else _core.Handedness.LEFT))
+        k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
+        frame = motion.frames[k][side].frame
+        p = np.asarray(frame.positions)
+        if pinch:
+            h = PINCH_HALF
+            centre = 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
+            where = "between the thumb and index tips"
+        else:
+            tips = p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0)
+            centre = 0.5 * (p[_core.PALM] + tips)
+            where = "between the palm and the fingertips"
+        # the hand must not touch the cube before it closes: lower the cube 1 mm at a time until the hand's
+        # particles clear it in every frame before k0, where the strength first reaches QUARTER
+        k0 = int(np.argmax(np.nan_to_num(strength, nan=-1) >= QUARTER))
+        before = [fr[side].frame for fr in motion.frames[:k0] if side in fr]
+        # a grab: no particle of the simulated hand may touch the cube early; a pinch: the index finger may not
+        # (the thumb is the anvil a pinch closes against: it may rest at the cube)
+        q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def)
+        near = (np.abs(q[:, [0, 2]] - centre[[0, 2]]) < h + r[:, None] + CLEAR).all(axis=1)
+        q, r = q[near], r[near]
+        top = centre[1] + h
+        for _ in range(200):
+            c = np.array([centre[0], top - h, centre[2]])
+            if not (np.linalg.norm(np.maximum(np.abs(q - c) - h, 0), axis=1) - r < CLEAR).any():
+                break
+            top -= 1e-3
+        lowered = centre[1] + h - top
+        centre = centre - [0, lowered, 0] + shift
+        if lowered > 0:
+            where += f", lowered {lowered * 1000:.0f} mm to clear the opening hand"
+        rule = (f"{'pinch' if pinch else 'grab'} of the {side} hand half closed at t={motion.times[k]:.2f} s "
+                f"(frame {k}): {2 * h * 100:.1f} cm cube {where}")
+        return {"position": [float(centre[0]), float(centre[1] - h), float(centre[2])], "half_extent": h}, rule
+    side = next(s for s in HANDS if any(s in f for f in motion.frames))
+    palms = motion.palms(side) + shift
+    lowest = min(float(np.nanmin(np.asarray(f[side].frame.positions)[np.asarray(f[side].frame.valid), 1]))
+                 for f in motion.frames if side in f and f[side].frame.tracked) + shift[1]
+    centre = palms.mean(axis=0)
+    top = lowest + BRUSH
+    return ({"position": [float(centre[0]), float(top - 2 * h), float(centre[2])]},
+            f"no closing hand: cube under the {side} hand's mean palm, top {BRUSH * 100:.0f} cm above its lowest joint")
+
+
+def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: Sequence = None,
+                        world_def=None) -> _rec.Recording:
+    """A handsim Recording of `motion` on `scene` (placement and resampling of the module docstring)."""
+    if hand_defs is None:
+        hand_defs = [_core.HandDef(handedness=_core.Handedness.RIGHT), _core.HandDef(handedness=_core.Handedness.LEFT)]
+    shift = placement(motion)
+    params, rule = {}, "default jewelry box"
+    if scene == "free_box":
+        params, rule = free_box_params(motion, shift, hand_defs)
+    elif scene != "jewelry_box":
+        raise ValueError(f"scene: expected 'jewelry_box' or 'free_box' for tracker input, got {scene!r}")
+    if hand_defs is None:
+        hand_defs = [_core.HandDef(handedness=_core.Handedness.RIGHT), _core.HandDef(handedness=_core.Handedness.LEFT)]
+    pose = np.array([*shift, 0, 0, 0, 1.0])
+    n = int(math.floor(motion.times[-1] / dt + 1e-9)) + 1
+    index = np.searchsorted(motion.times, np.arange(n) * dt + 1e-12, side="right") - 1
+    J = _core.JOINT_COUNT
+    H = len(hand_defs)
+    present = np.ones((n, H), bool)
+    positions = np.full((n, H, J, 3), np.nan)
+    orientations = np.tile([0.0, 0, 0, 1], (n, H, J, 1))
+    radii = np.full((n, H, J), 0.01)
+    valid = np.zeros((n, H, J), bool)
+    cache = {}
+    for i, k in enumerate(index):
+        for h, d in enumerate(hand_defs):
+            side = "right" if d.handedness == _core.Handedness.RIGHT else "left"
+            a = motion.frames[k].get(side)
+            if a is None:
+                continue
+            key = (int(k), side)
+            if key not in cache:
+                cache[key] = a.frame.transformed(pose)
+            f = cache[key]
+            positions[i, h], orientations[i, h] = f.positions, f.orientations
+            radii[i, h], valid[i, h] = f.radii, f.valid
+    synthesized = sorted({n_ for f in motion.frames for a in f.values() for n_ in a.synthesized})
+    info = {"source": motion.source, "name": motion.name, "translation": [float(v) for v in shift],
+            "placement": rule, "resampled_dt": dt, "synthesized_joints": synthesized}
+    return _rec.Recording(scene, params, _rec.world_def_to_dict(world_def or _core.WorldDef()),
+                          [_rec.hand_def_to_dict(d) for d in hand_defs], np.full(n, dt), present, positions,
+                          orientations, radii, valid, [], None, info)
+
+
+@dataclasses.dataclass
+class Summary:
+    name: str
+    scene: str
+    steps: int
+    duration_s: float
+    grasps: Dict[str, int]          # GRASP_BEGIN per scene object
+    drops: int                      # grasps ended by tracking loss
+    releases: int                   # grasps ended by opening the hand
+    contacts: Dict[str, int]        # CONTACT_BEGIN per scene object
+    held_s: Dict[str, float]        # time each object spent grasped
+    finite: bool                    # every body pose finite after every step
+    max_lid_deg: Optional[float]
+    max_hinge_violation_m: Optional[float]
+    max_lift_m: Optional[float]     # free box: highest rise of the cube above its start
+    max_shift_m: Optional[float]    # free box: largest horizontal displacement of the cube
+    hash_matches: Optional[bool]
+    final_hash: int
+    first_grasp_s: Optional[float] = None  # time of the first GRASP_BEGIN
+
+
+    def lines(self) -> List[str]:
+        out = [f"{self.name} on {self.scene}: {self.steps} steps, {self.duration_s:.2f} s",
+               f"  grasps: {self.grasps or 'none'}"
+               + (f" (first at {self.first_grasp_s:.2f} s)" if self.first_grasp_s is not None else "")
+               + f"; held s: { {k: round(v, 2) for k, v in self.held_s.items()} or 'none'}",
+               f"  grasp ends: {self.releases} released, {self.drops} dropped (tracking lost)",
+               f"  contacts begun: {self.contacts or 'none'}",
+               f"  all state finite: {self.finite}"]
+        if self.max_lid_deg is not None:
+            out.append(f"  lid angle max {self.max_lid_deg:.1f} deg, hinge violation max {self.max_hinge_violation_m:.2e} m")
+        if self.max_lift_m is not None:
+            out.append(f"  cube lifted max {self.max_lift_m * 100:.1f} cm, moved max {self.max_shift_m * 100:.1f} cm")
+        if self.hash_matches is not None:
+            out.append(f"  state hashes match the recording: {self.hash_matches}")
+        out.append(f"  final state_hash {self.final_hash:#018x}")
+        return out
+
+
+def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, steps: Optional[int] = None,
+        motion: Optional[Motion] = None, store: Optional[dict] = None) -> Summary:
+    """Replays `rec` (its first `steps` only, if given), collects the summary and (with `picture`) writes the
+    PNG. With `store` (a dict), also leaves the timeline ("trace") and the key frames ("snaps") there."""
+    names = {}
+    trace = {"t": [], "lid": [], "lift": [], "grasped": []}
+    snaps = []
+    state = {"finite": True, "viol": 0.0, "lid": -1e9, "lift": 0.0, "shift": 0.0, "start": None}
+    counts = {"grasps": {}, "contacts": {}, "drops": 0, "releases": 0, "held": {}, "first": None}
+    n_total = rec.steps if steps is None else min(steps, rec.steps)
+    keys = set(np.linspace(0, n_total - 1, 4).round().astype(int).tolist())
+
+    def on_step(i, world, scene):
+        if not names:
+            names.update({v: k for k, v in scene.objects.items()})
+            if "box" in scene.objects:
+                state["start"] = np.asarray(world.body_pose(scene["box"]), float)
+        for body in world.bodies():
+            if not np.isfinite(world.body_pose(body)).all():
+                state["finite"] = False
+        for e in world.events():
+            label = names.get(e.body, "?")
+            if e.type == _core.EventType.GRASP_BEGIN:
+                counts["grasps"][label] = counts["grasps"].get(label, 0) + 1
+                if counts["first"] is None:
+                    counts["first"] = world.time
+            elif e.type == _core.EventType.CONTACT_BEGIN:
+                counts["contacts"][label] = counts["contacts"].get(label, 0) + 1
+            elif e.type == _core.EventType.GRASP_END:
+                if e.reason == _core.EventReason.TRACKING_LOST:
+                    counts["drops"] += 1
+                elif e.reason == _core.EventReason.RELEASED:
+                    counts["releases"] += 1
+        grasped = []
+        for label, body in scene.objects.items():
+            if isinstance(body, _core.BodyId) and label != "table" and world.body_grasp(body).grasped:
+                counts["held"][label] = counts["held"].get(label, 0.0) + float(rec.dt[i])
+                grasped.append(label)
+        trace["t"].append(world.time)
+        trace["grasped"].append(bool(grasped))
+        if "hinge" in scene.objects:
+            s = world.joint_state(scene["hinge"])
+            state["viol"] = max(state["viol"], s.violation)
+            state["lid"] = max(state["lid"], math.degrees(s.value))
+            trace["lid"].append(math.degrees(s.value))
+        if state["start"] is not None:
+            p = np.asarray(world.body_pose(scene["box"]), float)
+            lift = p[1] - state["start"][1]
+            state["lift"] = max(state["lift"], lift)
+            state["shift"] = max(state["shift"], float(np.hypot(*(p[[0, 2]] - state["start"][[0, 2]]))))
+            trace["lift"].append(100 * lift)
+        if (picture is not None or store is not None) and i in keys:
+            bodies = {k: v for k, v in scene.objects.items() if isinstance(v, _core.BodyId) and k != "table"}
+            snaps.append(_render.snapshot(world, bodies, f"t={world.time:.2f} s" + ("  grasped" if grasped else "")))
+
+    result = _rec.replay(rec, on_step, steps=steps)
+    jewelry = rec.scene == "jewelry_box"
+    summary = Summary(name, rec.scene, result.steps, float(np.sum(rec.dt[:result.steps])), counts["grasps"],
+                      counts["drops"], counts["releases"], counts["contacts"], counts["held"], state["finite"],
+                      state["lid"] if jewelry else None, state["viol"] if jewelry else None,
+                      state["lift"] if rec.scene == "free_box" else None,
+                      state["shift"] if rec.scene == "free_box" else None,
+                      None if rec.hashes is None else result.matches, result.final_hash, counts["first"])
+    if picture is not None:
+        _picture(picture, rec, summary, snaps, trace, motion)
+    if store is not None:
+        store.update(trace=trace, snaps=snaps)
+    return summary
+
+
+def _picture(path: Path, rec, summary: Summary, snaps, trace, motion: Optional[Motion]):
+    plt = _render.pyplot()
+    fig = plt.figure(figsize=(12, 5.6))
+    grid = fig.add_gridspec(2, 4, height_ratios=[1.25, 1])
+    if rec.scene == "jewelry_box":
+        centre, axes, view = _default_lid_front() + [0, 0.04, -0.05], (2, 1), "side view, user at the right"
+    else:
+        centre = np.asarray(rec.scene_params["position"], float) + [0, 0.05, 0]
+        axes, view = (0, 1), "front view"
+    for k, snap in enumerate(snaps[:4]):
+        _render.draw(fig.add_subplot(grid[0, k]), snap, centre, half_width=0.16, axes=axes)
+    ax = fig.add_subplot(grid[1, :])
+    t = np.asarray(trace["t"])
+    if rec.scene == "jewelry_box":
+        ax.plot(t, trace["lid"], color="darkgoldenrod", label="lid angle (deg)")
+    else:
+        ax.plot(t, trace["lift"], color="tab:green", label="cube lift (cm)")
+    g = np.asarray(trace["grasped"], bool)
+    if g.any():
+        ax.fill_between(t, 0, 1, where=g, transform=ax.get_xaxis_transform(), color="0.8", label="grasped")
+    if motion is not None and motion.grab is not None:
+        ax2 = ax.twinx()
+        for col, side, colour in ((0, "right", "tab:blue"), (1, "left", "tab:red")):
+            if not np.all(np.isnan(motion.grab[:, col])):
+                ax2.plot(motion.times + t[0], motion.grab[:, col], ":", color=colour, lw=1, label=f"Leap grab {side}")
+                ax2.plot(motion.times + t[0], motion.pinch[:, col], "--", color=colour, lw=0.8, label=f"Leap pinch {side}")
+        ax2.set_ylim(-0.05, 1.05)
+        ax2.set_ylabel("Leap strength")
+        ax2.legend(fontsize=7, loc="upper right")
+    ax.set_xlabel("time (s)")
+    ax.legend(fontsize=7, loc="upper left")
+    fig.suptitle(f"{summary.name} on {rec.scene} ({view}; blue right hand, red left): grasps {summary.grasps or 'none'}",
+                 fontsize=10)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
+def load_motion(path: Path) -> Motion:
+    suffixes = "".join(path.suffixes[-2:]).lower()
+    if suffixes.endswith(".json.lz") or path.suffix.lower() == ".json":
+        from .adapters.leap import load_leap_recording
+        return motion_from_leap(load_leap_recording(path))
+    if path.suffix.lower() == ".bvh":
+        from .adapters.bvh import load_bvh_motion
+        return load_bvh_motion(path)
+    raise ValueError(f"path: expected .npz, .json.lz, .json or .bvh, got {path.name!r}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m handsim.replay", description=__doc__.split("\n\n")[0])
+    ap.add_argument("files", nargs="+", type=Path, help="recordings: .npz (handsim), .json.lz/.json (Leap), .bvh")
+    ap.add_argument("--scene", choices=("jewelry_box", "free_box"), action="append",
+                    help="scene(s) for tracker input (default: jewelry_box); repeat for several")
+    ap.add_argument("--out", type=Path, default=Path("out/replay"), help="output folder (default out/replay)")
+    ap.add_argument("--save", action="store_true", help="also save each tracker input as a handsim recording")
+    ap.add_argument("--json", action="store_true", help="print the summaries as one JSON document")
+    args = ap.parse_args(argv)
+    scenes = args.scene or ["jewelry_box"]
+    docs = []
+    for path in args.files:
+        if not path.is_file():
+            print(f"error: path: no such file: {path}", file=sys.stderr)
+            return 2
+        base = path.name.split(".")[0]
+        if path.suffix.lower() == ".npz":
+            rec = _rec.load(path)
+            runs = [(rec, rec.scene, None)]
+        else:
+            motion = load_motion(path)
+            runs = [(session_from_motion(motion, s), s, motion) for s in scenes]
+        lines = []
+        for rec, scene, motion in runs:
+            summary = run(rec, base, args.out / f"{base}_{scene}.png", motion=motion)
+            if args.save and motion is not None:
+                rec.save(args.out / f"{base}_{scene}.npz")
+            lines += summary.lines()
+            if rec.info.get("placement"):
+                lines.append(f"  placement: {rec.info['placement']}; translation "
+                             f"{np.round(rec.info['translation'], 4).tolist()} m")
+            docs.append({**dataclasses.asdict(summary), "placement": rec.info.get("placement"),
+                         "synthesized_joints": rec.info.get("synthesized_joints")})
+        (args.out / f"{base}.txt").write_text("\n".join(lines) + "\n")
+        if not args.json:
+            print("\n".join(lines))
+    if args.json:
+        print(json.dumps(docs, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

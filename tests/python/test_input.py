@@ -1,0 +1,540 @@
+"""Hand input (issue 12): tracker adapters, record and replay, real recorded motion.
+
+Tests that use ../shared/assets (Leap recordings, MRTK poses) skip when the folder is absent; the rest build
+their input from make_hand_frame."""
+import json
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import handsim
+from handsim import recording, replay
+from handsim.adapters import bvh, lzstring, mediapipe, mrtk, openxr, skeleton
+from handsim.adapters.leap import (MM, TIP_EXTENSION, load_leap_recording, read_leap_json)
+
+RIGHT, LEFT = handsim.Handedness.RIGHT, handsim.Handedness.LEFT
+PALM_POSE = [0.05, 1.0, -0.2, 0, math.sin(0.3), 0, math.cos(0.3)]
+POSES = {"flat": {}, "fist": {"curl": 1.0},
+         "pinch": {"curl": [0.2, 0.3, 0.0, 0.0, 0.0], "thumb_opposition": 1.0}}
+FLEX = [handsim.THUMB_PROXIMAL, handsim.THUMB_DISTAL] + [
+    j for f in ("INDEX", "MIDDLE", "RING", "LITTLE") for j in (getattr(handsim, f + "_INTERMEDIATE"),
+                                                             getattr(handsim, f + "_DISTAL"))]
+
+
+def shared(sub):
+    candidates = []
+    if os.environ.get("HANDSIM_SHARED_ASSETS"):
+        candidates.append(Path(os.environ["HANDSIM_SHARED_ASSETS"]) / sub)
+    candidates.append(Path(__file__).resolve().parents[2].parent / "shared" / "assets" / sub)
+    for c in candidates:
+        if c.is_dir() and any(c.iterdir()):
+            return c
+    return None
+
+
+def source(name, handedness=RIGHT):
+    return handsim.make_hand_frame(handedness, PALM_POSE, **POSES[name])
+
+
+def flexion_deg(frame):
+    return np.degrees(skeleton.joint_angles(frame))
+
+
+# --- LZ-String -----------------------------------------------------------------------------------------
+
+def lz_compress_base64(text):
+    """LZ-String compressToBase64, written from the format description for this test only."""
+    out, val, pos = [], 0, 0
+
+    def bits(value, n):
+        nonlocal val, pos
+        for _ in range(n):
+            val = (val << 1) | (value & 1)
+            value >>= 1
+            if pos == 5:
+                out.append(val)
+                val, pos = 0, 0
+            else:
+                pos += 1
+
+    dictionary, fresh = {}, set()
+    size, num_bits, enlarge = 3, 2, 2
+    w = ""
+
+    def emit(word):
+        nonlocal enlarge, num_bits
+        if word in fresh:
+            code = ord(word[0])
+            bits(0 if code < 256 else 1, num_bits)
+            bits(code, 8 if code < 256 else 16)
+            enlarge -= 1
+            if enlarge == 0:
+                enlarge, num_bits = 1 << num_bits, num_bits + 1
+            fresh.discard(word)
+        else:
+            bits(dictionary[word], num_bits)
+        enlarge -= 1
+        if enlarge == 0:
+            enlarge, num_bits = 1 << num_bits, num_bits + 1
+
+    for c in text:
+        if c not in dictionary:
+            dictionary[c] = size
+            size += 1
+            fresh.add(c)
+        if w + c in dictionary:
+            w = w + c
+        else:
+            emit(w)
+            dictionary[w + c] = size
+            size += 1
+            w = c
+    if w:
+        emit(w)
+    bits(2, num_bits)
+    while True:
+        val <<= 1
+        if pos == 5:
+            out.append(val)
+            break
+        pos += 1
+    alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/"
+    s = "".join(alphabet[v] for v in out)
+    return s + "=" * (-len(s) % 4)
+
+
+@pytest.mark.parametrize("text", ["", "a", "hello hello hello", '{"frames": [1, 2, 3], "x": "ü€"}',
+                                  "".join(chr(32 + (i * 7919) % 400) for i in range(3000))])
+def test_lzstring_round_trip(text):
+    assert lzstring.decompress_from_base64(lz_compress_base64(text)) == text
+
+
+def test_lzstring_bad_input_names_the_argument():
+    with pytest.raises(lzstring.LZStringError, match=r"^blob: not Base64 LZ-String data \(character '\*' at 4\)"):
+        lzstring.decompress_from_base64("N4Ig*", "blob")
+    good = lz_compress_base64("a fairly long text " * 20)
+    with pytest.raises(lzstring.LZStringError, match="^text: LZ-String data ends in the middle of a code"):
+        lzstring.decompress_from_base64(good[:40])
+    with pytest.raises(TypeError, match="^text: expected str, got bytes"):
+        lzstring.decompress_from_base64(b"abc")
+
+
+# --- Leap -------------------------------------------------------------------------------------------------
+
+def leap_objects(frame, version, hand_id=7, grab=0.0):
+    """A Leap hand and its pointables (v0.1 fields, plus carp/btip for v2) made from a HandFrame, in mm."""
+    p = np.asarray(frame.positions) / MM
+    R = skeleton.quat_matrix(frame.orientations[handsim.PALM])
+    hand = {"id": hand_id, "type": "right" if frame.handedness == RIGHT else "left",
+            "direction": list(-R[:, 2]), "palmNormal": list(-R[:, 1]), "palmPosition": list(p[handsim.PALM]),
+            "grabStrength": grab, "pinchStrength": 0.0, "confidence": 1.0}
+    pointables = []
+    for t, f in enumerate(("thumb", "index", "middle", "ring", "little")):
+        c = skeleton.chain(f)
+        pts = ([p[c[0]]] + [p[j] for j in c]) if f == "thumb" else [p[j] for j in c]
+        carp, mcp, pip, dip, btip = pts
+        obj = {"id": 10 * hand_id + t, "handId": hand_id, "type": t, "mcpPosition": list(mcp),
+               "pipPosition": list(pip), "dipPosition": list(dip),
+               "tipPosition": list(dip + (btip - dip) / TIP_EXTENSION)}
+        if version == 2:
+            obj.update(carpPosition=list(carp), btipPosition=list(btip))
+        pointables.append(obj)
+    return hand, pointables
+
+
+def leap_doc(frames, version):
+    if version != 2:
+        out = []
+        for i, f in enumerate(frames):
+            hand, pointables = leap_objects(f, version)
+            out.append({"id": i, "timestamp": 1000 + 9000 * i, "hands": [hand], "pointables": pointables})
+        return {"metadata": {"formatVersion": version}, "frames": out}
+    hand_keys = ["id", "type", "direction", "palmNormal", "palmPosition", "grabStrength", "pinchStrength"]
+    pointable_keys = ["id", "direction", "handId", "tipPosition", "carpPosition", "mcpPosition", "pipPosition",
+                      "dipPosition", "btipPosition"]
+    packed = [["id", "timestamp", {"hands": [hand_keys]}, {"pointables": [pointable_keys]},
+               {"interactionBox": ["center", "size"]}]]
+    for i, f in enumerate(frames):
+        hand, pointables = leap_objects(f, 2)
+        packed.append([i, 1000 + 17000 * i, [[hand.get(k) for k in hand_keys]],
+                       [[p.get(k, [0, 0, 1]) for k in pointable_keys] for p in pointables], [[0, 200, 0], [1, 1, 1]]])
+    return {"metadata": {"formatVersion": 2}, "frames": packed}
+
+
+@pytest.mark.parametrize("version", [0.1, 2])
+def test_leap_frames_map_to_the_openxr_joints(version, tmp_path):
+    frames = [source(name) for name in POSES]
+    path = tmp_path / "synthetic.json"
+    path.write_text(json.dumps(leap_doc(frames, version)))
+    rec = load_leap_recording(path)
+    assert rec.format_version == version and rec.hand_counts() == {1: 3}
+    np.testing.assert_allclose(rec.times, np.arange(3) * (0.009 if version != 2 else 0.017), atol=1e-12)
+    for f, conv in zip(frames, rec.frames):
+        a = conv["right"]
+        assert a.invalid == ()
+        given = [j for j in range(26) if j not in (handsim.PALM, handsim.WRIST) and
+                 (version == 2 or handsim.JOINT_NAMES[j].split("_")[1] != "metacarpal" or j == handsim.THUMB_METACARPAL)]
+        np.testing.assert_allclose(np.asarray(a.frame.positions)[given], np.asarray(f.positions)[given], atol=1e-9)
+        p = np.asarray(a.frame.positions)
+        np.testing.assert_allclose(p[handsim.PALM], 0.5 * (p[handsim.MIDDLE_METACARPAL] + p[handsim.MIDDLE_PROXIMAL]))
+        np.testing.assert_allclose(flexion_deg(a.frame)[FLEX], flexion_deg(f)[FLEX], atol=1e-6)
+        expected = {"palm", "wrist"} | ({"thumb_tip"} | {g + "_" + b for g in ("index", "middle", "ring", "little")
+                                                           for b in ("metacarpal", "tip")} if version != 2 else set())
+        assert set(a.synthesized) == expected
+    flat, fist = (flexion_deg(rec.frames[i]["right"].frame) for i in (0, 1))
+    assert flat[handsim.INDEX_INTERMEDIATE] < 5 and fist[handsim.INDEX_INTERMEDIATE] > 60
+
+
+def test_leap_errors_name_what_is_wrong(tmp_path):
+    doc = leap_doc([source("flat")], 0.1)
+    with pytest.raises(ValueError, match=r"formatVersion 3 is not supported"):
+        read_leap_json({**doc, "metadata": {"formatVersion": 3}})
+    del doc["frames"][0]["pointables"][2]["pipPosition"]
+    with pytest.raises(ValueError, match=r"recording\.frames\[0\]\.hands\[0\]\.pointables\[type 2\]: mcpPosition, "
+                                         r"pipPosition and dipPosition are needed"):
+        read_leap_json(doc)
+    doc = leap_doc([source("flat")], 0.1)
+    doc["frames"][0]["pointables"][1]["dipPosition"] = [1, float("nan"), 2]
+    with pytest.raises(ValueError, match=r"pointables\[type 1\]\.dipPosition: expected 3 finite numbers"):
+        read_leap_json(doc)
+    with pytest.raises(FileNotFoundError, match="^path: no such file"):
+        load_leap_recording(tmp_path / "missing.json.lz")
+    (tmp_path / "bad.json.lz").write_text("!!!")
+    with pytest.raises(lzstring.LZStringError, match=r"^path \(bad\.json\.lz\): not Base64"):
+        load_leap_recording(tmp_path / "bad.json.lz")
+
+
+@pytest.fixture(scope="module")
+def leap_recordings():
+    where = shared("leap_recordings")
+    if where is None:
+        pytest.skip("the Leap recordings are not there (../shared/assets/leap_recordings)")
+    return {p.name.split(".")[0]: load_leap_recording(p) for p in sorted(where.glob("*.json.lz"))}
+
+
+# frames and hands per frame as listed in the recordings' README
+README_COUNTS = {"grab": (374, {1: 374}), "pinch": (307, {1: 307}), "pinch-half-res": (154, {1: 154}),
+                 "pinch-57fps": (133, {1: 133}), "three-claps": (403, {2: 403}), "flapping": (328, {2: 328}),
+                 "confidence2": (368, {2: 368}), "confidence2-49fps": (171, {1: 39, 2: 132}),
+                 "confidence-demo": (1080, {1: 1080}), "confidence-demo-half-res": (540, {1: 540}),
+                 "confidence-demo-quarter-res": (270, {1: 270}), "confidence-demo-eighth-res": (135, {1: 135})}
+
+
+def test_real_leap_recordings_decode_and_map(leap_recordings):
+    assert set(leap_recordings) == set(README_COUNTS)
+    for name, rec in leap_recordings.items():
+        frames, hands = README_COUNTS[name]
+        assert (len(rec.frames), rec.hand_counts()) == (frames, hands), name
+        for f in rec.frames[::10]:
+            for a in f.values():
+                assert a.frame.tracked and a.invalid == ()
+                assert np.isfinite(a.frame.positions).all()
+    # pinch-half-res is every second frame of pinch
+    full, half = leap_recordings["pinch"], leap_recordings["pinch-half-res"]
+    for i in (0, 40, 153):
+        np.testing.assert_array_equal(half.frames[i]["right"].frame.positions, full.frames[2 * i]["right"].frame.positions)
+    # the palm joint is the middle of the middle metacarpal, 13 mm from Leap's palmPosition (formatVersion 2)
+    doc = leap_recordings["pinch-57fps"]
+    assert doc.format_version == 2 and "middle_metacarpal" not in doc.frames[0]["right"].synthesized
+    # a grab closes the fingers: index flexion follows Leap's grab strength
+    grab = leap_recordings["grab"]
+    flex = np.array([flexion_deg(f["right"].frame)[handsim.INDEX_INTERMEDIATE] for f in grab.frames])
+    assert flex[grab.grab[:, 0] >= 0.99].min() > 50 and flex[grab.grab[:, 0] <= 0.01].max() < 40
+
+
+# --- OpenXR, Unity, MRTK --------------------------------------------------------------------------------------
+
+def test_openxr_is_the_identity_and_unity_converts_handedness():
+    f = source("pinch")
+    a = openxr.from_openxr("right", f.positions, f.orientations, f.radii, f.valid)
+    for attr in ("positions", "orientations", "radii", "valid"):
+        np.testing.assert_array_equal(getattr(a.frame, attr), getattr(f, attr))
+    assert a.synthesized == () and a.invalid == ()
+    up, uq = openxr.unity_to_openxr(f.positions, f.orientations)  # the map is its own inverse
+    b = openxr.from_unity(RIGHT, up, uq * 1.0004, f.radii)
+    np.testing.assert_allclose(b.frame.positions, f.positions, atol=1e-15)
+    np.testing.assert_allclose(b.frame.orientations, f.orientations, atol=1e-12)
+    # in Unity's space a joint's +Z points along its bone (OpenXR: -Z)
+    for j in (handsim.INDEX_PROXIMAL, handsim.THUMB_PROXIMAL):
+        bone = up[j + 1] - up[j]
+        assert skeleton.quat_matrix(uq[j])[:, 2] @ bone > 0.999 * np.linalg.norm(bone)
+
+
+def test_openxr_and_unity_errors_name_the_argument():
+    f = source("flat")
+    p = np.asarray(f.positions).copy()
+    p[7, 1] = np.nan
+    with pytest.raises(ValueError, match=r"^positions\[7\]: must be finite"):
+        openxr.from_openxr(RIGHT, p, f.orientations)
+    valid = np.ones(26, bool)
+    valid[7] = False
+    a = openxr.from_openxr(RIGHT, p, f.orientations, valid=valid)
+    assert a.invalid == ("index_proximal",)
+    with pytest.raises(ValueError, match=r"^orientations: expected shape \(26, 4\), got \(26, 3\)"):
+        openxr.from_openxr(RIGHT, f.positions, f.positions)
+    with pytest.raises(TypeError, match="^handedness: expected handsim.Handedness or 'left'/'right', got 3"):
+        openxr.from_openxr(3, f.positions, f.orientations)
+    with pytest.raises(ValueError, match=r"^rotations\[0\]: not a rotation quaternion"):
+        openxr.from_unity(RIGHT, f.positions, np.zeros((26, 4)))
+    with pytest.raises(TypeError, match="^valid: expected booleans"):
+        openxr.from_openxr(RIGHT, f.positions, f.orientations, valid=np.ones(26))
+
+
+@pytest.fixture(scope="module")
+def mrtk_poses():
+    where = shared("poses")
+    if where is None:
+        pytest.skip("the MRTK poses are not there (../shared/assets/poses)")
+    return {p.stem.split("_")[-1].split("-")[-1]: p for p in sorted(where.glob("ArticulatedHandPose*.json"))}
+
+
+def test_mrtk_poses_give_the_named_shapes(mrtk_poses):
+    poses = {k: mrtk.load_mrtk_pose(p).frame for k, p in mrtk_poses.items()}
+    flex = {k: flexion_deg(f) for k, f in poses.items()}
+    fingers_pip = [handsim.INDEX_INTERMEDIATE, handsim.MIDDLE_INTERMEDIATE, handsim.RING_INTERMEDIATE]
+    assert flex["Flat"][fingers_pip].max() < 15
+    assert flex["Grab"][fingers_pip].min() > 60
+    tip_gap = lambda f: np.linalg.norm(np.asarray(f.positions)[handsim.THUMB_TIP] - np.asarray(f.positions)[handsim.INDEX_TIP])
+    assert tip_gap(poses["Pinch"]) < 0.015 and tip_gap(poses["Flat"]) > 0.08
+    for name, f in poses.items():
+        p, q = np.asarray(f.positions), np.asarray(f.orientations)
+        palm = skeleton.quat_matrix(q[handsim.PALM])
+        assert (palm.T @ (p[handsim.THUMB_PROXIMAL] - p[handsim.PALM]))[0] < 0, name  # right thumb on -X
+        if name not in ("Open", "Pinch"):  # the README: their tips carry their own rotations
+            for j in (handsim.INDEX_PROXIMAL, handsim.MIDDLE_INTERMEDIATE, handsim.LITTLE_DISTAL):
+                bone = (p[j + 1] - p[j]) / np.linalg.norm(p[j + 1] - p[j])
+                assert -skeleton.quat_matrix(q[j])[:, 2] @ bone > 0.999, (name, j)
+    left = mrtk.load_mrtk_pose(mrtk_poses["Flat"], "left").frame
+    palm = skeleton.quat_matrix(left.orientations[handsim.PALM])
+    assert (palm.T @ (np.asarray(left.positions)[handsim.THUMB_PROXIMAL] - left.positions[handsim.PALM]))[0] > 0
+
+
+def test_mrtk_pose_through_mediapipe_keeps_its_joint_angles(mrtk_poses):
+    """Device orientations (MRTK) vs orientations rebuilt from 21 positions: the flexion angles agree."""
+    for name in ("Flat", "Grab", "PinchSteadyWrist", "Poke", "ThumbsUp"):  # not Open, Pinch: see the README
+        f = mrtk.load_mrtk_pose(mrtk_poses[name]).frame
+        a = mediapipe.from_mediapipe(mediapipe.landmarks_of(f), RIGHT)
+        finger = [j for j in FLEX if j > handsim.THUMB_TIP]
+        diff = np.abs(flexion_deg(a.frame) - flexion_deg(f))[finger]
+        assert diff.max() < 4.0, (name, diff.round(1))
+
+
+def test_mrtk_errors(tmp_path):
+    with pytest.raises(FileNotFoundError, match="^path: no such file"):
+        mrtk.load_mrtk_pose(tmp_path / "none.json")
+    with pytest.raises(ValueError, match=r"items\[0\]\.joint: unknown MRTK joint 'Elbow'"):
+        mrtk.read_mrtk_pose({"items": [{"joint": "Elbow", "pose": {}}]})
+    with pytest.raises(ValueError, match=r"^pose: joints missing: \['palm', 'wrist'"):
+        mrtk.read_mrtk_pose({"items": []})
+
+
+# --- MediaPipe ----------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", list(POSES))
+@pytest.mark.parametrize("coordinates", ["world", "image"])
+def test_mediapipe_landmarks_give_the_pose(name, coordinates):
+    f = source(name)
+    lm = mediapipe.landmarks_of(f, coordinates)
+    if coordinates == "image":  # normalise by a 640 x 480 image, z on the scale of x
+        lm = lm * 1000 / np.array([640, 480, 640])
+    a = mediapipe.from_mediapipe(lm, RIGHT, coordinates, image_size=(640, 480) if coordinates == "image" else None,
+                                 origin=f.positions[handsim.WRIST])
+    assert set(a.synthesized) == {"palm", "index_metacarpal", "middle_metacarpal", "ring_metacarpal",
+                                  "little_metacarpal"} and a.invalid == ()
+    given = mediapipe.LANDMARK_TO_JOINT
+    np.testing.assert_allclose(np.asarray(a.frame.positions)[given], np.asarray(f.positions)[given], atol=1e-9)
+    np.testing.assert_allclose(flexion_deg(a.frame)[FLEX], flexion_deg(f)[FLEX], atol=1e-6)
+    # finger frames match make_hand_frame's; thumb frames only up to the roll about the bone
+    q, r = np.asarray(a.frame.orientations), np.asarray(f.orientations)
+    angle = np.degrees(2 * np.arccos(np.clip(np.abs((q * r).sum(axis=1)), 0, 1)))
+    fingers = [j for j in given if j > handsim.THUMB_TIP]
+    assert angle[fingers].max() < 1.0
+    for j in (handsim.THUMB_PROXIMAL, handsim.THUMB_DISTAL):
+        assert skeleton.quat_matrix(q[j])[:, 2] @ skeleton.quat_matrix(r[j])[:, 2] > 0.9999
+
+
+def test_mediapipe_invalid_landmarks_and_errors():
+    f = source("flat")
+    lm = mediapipe.landmarks_of(f)
+    vis = np.ones(21)
+    vis[8] = 0.1  # the index tip is not seen
+    lm_nan = lm.copy()
+    lm_nan[8] = np.nan
+    a = mediapipe.from_mediapipe(lm_nan, RIGHT, visibility=vis)
+    assert a.invalid == ("index_distal", "index_tip")  # the distal bone needs its tip
+    assert a.frame.tracked
+    vis[0] = 0.0  # no wrist: the palm frame cannot be built, nor anything relative to it
+    assert not mediapipe.from_mediapipe(lm, RIGHT, visibility=vis).frame.tracked
+    with pytest.raises(ValueError, match=r"^landmarks\[8\]: must be finite"):
+        mediapipe.from_mediapipe(lm_nan, RIGHT)
+    with pytest.raises(ValueError, match=r"^landmarks: expected shape \(21, 3\), got \(20, 3\)"):
+        mediapipe.from_mediapipe(lm[:20], RIGHT)
+    with pytest.raises(ValueError, match="^image_size: .* is needed for image coordinates"):
+        mediapipe.from_mediapipe(lm, RIGHT, "image")
+    with pytest.raises(ValueError, match="^coordinates: expected 'world' or 'image', got 'pixels'"):
+        mediapipe.from_mediapipe(lm, RIGHT, "pixels")
+    with pytest.raises(TypeError, match="^landmarks: expected an array"):
+        mediapipe.from_mediapipe("lm", RIGHT)
+
+
+# --- BVH --------------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("order", ["YXZ", "ZXY", "XYZ"])
+def test_bvh_written_and_read_back_gives_the_poses(order, tmp_path):
+    frames = [source(name) for name in POSES]
+    path = bvh.write_bvh(tmp_path / "hand.bvh", frames, order=order)
+    text = path.read_text()
+    assert "JOINT RightInHandIndex" in text and f"CHANNELS 3 {order[0]}rotation" in text
+    parsed = bvh.load_bvh(path)
+    assert parsed.motion.shape == (3, 6 + 3 * 20) and parsed.frame_time == pytest.approx(1 / 60)
+    out = bvh.hand_frames(parsed, RIGHT)  # centimetres -> metres
+    for f, a in zip(frames, out):
+        assert a.synthesized == ("palm",) and a.invalid == ()
+        given = [j for j in range(26) if j != handsim.PALM]
+        np.testing.assert_allclose(np.asarray(a.frame.positions)[given], np.asarray(f.positions)[given], atol=1e-8)
+        np.testing.assert_allclose(flexion_deg(a.frame)[FLEX], flexion_deg(f)[FLEX], atol=1e-5)
+
+
+def test_bvh_euler_order_matters():
+    """The same numbers under another channel order are another pose: the parser honours the file's order."""
+    text = ("HIERARCHY\nROOT A\n{\n OFFSET 0 0 0\n CHANNELS 3 {o}\n End Site\n {\n  OFFSET 0 0 10\n }\n}\n"
+            "MOTION\nFrames: 1\nFrame Time: 0.1\n30 40 50\n")
+    ends = []
+    for order in ("Xrotation Yrotation Zrotation", "Zrotation Yrotation Xrotation"):
+        b = bvh.parse_bvh(text.replace("{o}", order))
+        ends.append(b.global_transforms(0)[2][0])
+    assert np.linalg.norm(ends[0] - ends[1]) > 1.0
+    rx, ry, rz = (bvh._axis_rotation(k, math.radians(a)) for k, a in ((0, 30), (1, 40), (2, 50)))
+    np.testing.assert_allclose(ends[0], rx @ ry @ rz @ [0, 0, 10], atol=1e-12)
+
+
+def test_bvh_errors_name_the_line(tmp_path):
+    good = bvh.write_bvh(tmp_path / "h.bvh", [source("flat")]).read_text()
+    with pytest.raises(bvh.BvhError, match=r"line 5: unknown channel 'Wrotation'"):
+        bvh.parse_bvh(good.replace("Yrotation Xrotation Zrotation", "Wrotation Xrotation Zrotation", 1))
+    with pytest.raises(bvh.BvhError, match=r"MOTION has 65 values, expected 1 frames x 66 channels"):
+        bvh.parse_bvh(good.rsplit(" ", 1)[0])
+    with pytest.raises(ValueError, match=r"the left hand lacks joints \['wrist'"):
+        bvh.hand_frames(bvh.parse_bvh(good), LEFT)
+    with pytest.raises(FileNotFoundError, match="^path: no such file"):
+        bvh.load_bvh(tmp_path / "none.bvh")
+
+
+# --- Record and replay --------------------------------------------------------------------------------------
+
+def record_session(path):
+    rec = recording.Recorder("jewelry_box", hands=[handsim.HandDef(handedness=RIGHT), handsim.HandDef(handedness=LEFT)])
+    world, box = rec.world, rec.scene.box
+    for i in range(90):
+        if i == 10:
+            rec.set_joint_value("hinge", 0.2)
+        if i == 20:
+            rec.set_body_velocity("base", [0, 0.1, 0], [0, 0, 0])
+        palm = box.lid_pinch_palm(world, RIGHT, 0.2 * i / 90, 0.0)
+        right = handsim.make_hand_frame(RIGHT, palm, **vars_of(handsim.lid_pinch_shape()))
+        frames = [right] if i % 30 else [right, skeleton.untracked(LEFT)]
+        rec.step(1 / 60, frames if i != 45 else [])
+    rec.save(path)
+    return rec
+
+
+def vars_of(shape):
+    return {"curl": np.asarray(shape.curl), "thumb_opposition": shape.thumb_opposition, "spread": shape.spread}
+
+
+def test_record_and_replay_bit_for_bit(tmp_path):
+    rec = record_session(tmp_path / "s.npz")
+    loaded = recording.load(tmp_path / "s.npz")
+    assert loaded.steps == 90 and [e["op"] for e in loaded.edits] == ["set_joint_value", "set_body_velocity"]
+    with np.load(tmp_path / "s.npz") as z:  # plain numpy arrays
+        assert z["positions"].dtype == np.float64 and z["positions"].shape == (90, 2, 26, 3)
+        assert json.loads(str(z["header"][()]))["version"] == recording.FORMAT_VERSION
+    result = recording.replay(loaded)
+    assert result.matches and result.final_hash == rec.world.state_hash()
+    # a changed input changes the state: the replay notices where
+    loaded.positions[50, 0, :, 1] += 1e-6
+    assert recording.replay(loaded).first_mismatch == 50
+
+
+def test_recording_errors(tmp_path):
+    record_session(tmp_path / "s.npz")
+    with np.load(tmp_path / "s.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    header = json.loads(str(arrays["header"][()]))
+    for change, message in (({"version": 99}, r"recording version 99 is not supported: this handsim .* reads version 1"),
+                            ({"format": "other"}, r"format 'other', expected 'handsim-recording'")):
+        arrays["header"] = np.array(json.dumps({**header, **change}))
+        np.savez_compressed(tmp_path / "bad.npz", **arrays)
+        with pytest.raises(recording.RecordingError, match=message):
+            recording.load(tmp_path / "bad.npz")
+    arrays["header"] = np.array(json.dumps(header))
+    arrays["valid"] = arrays["valid"][:, :, :25]
+    np.savez_compressed(tmp_path / "bad.npz", **arrays)
+    with pytest.raises(recording.RecordingError, match=r"valid has shape \(90, 2, 25\), expected \(90, 2, 26\)"):
+        recording.load(tmp_path / "bad.npz")
+    with pytest.raises(FileNotFoundError, match="^path: no such file"):
+        recording.load(tmp_path / "none.npz")
+    (tmp_path / "text.npz").write_text("not a zip")
+    with pytest.raises(recording.RecordingError, match=r"not a handsim recording"):
+        recording.load(tmp_path / "text.npz")
+    rec = recording.Recorder("jewelry_box")
+    with pytest.raises(handsim.InvalidStateError, match="^body: is the child of a hard joint"):
+        rec.set_body_velocity("lid", [0, 1, 0], [0, 0, 0])
+    rec = recording.Recorder("free_box")
+    with pytest.raises(KeyError, match="scene 'free_box' has no object 'lid'"):
+        rec.set_body_pose("lid", [0, 1, 0, 0, 0, 0, 1])
+    with pytest.raises(TypeError, match=r"^hands\[0\]: expected a HandDef, got str"):
+        recording.Recorder("free_box", hands=["right"])
+    with pytest.raises(ValueError, match="^scene: expected one of"):
+        recording.Recorder("kitchen")
+    with pytest.raises(ValueError, match=r"^scene_params\.size: not a free_box parameter"):
+        recording.Recorder("free_box", {"size": 1})
+    assert rec.recording.steps == 0  # nothing was recorded by the rejected calls
+
+
+def test_replay_command_on_a_bvh_and_on_its_recording(tmp_path):
+    """python -m handsim.replay: a BVH (tracker input) on the free box, saved, and the saved recording replayed
+    with its hashes checked."""
+    frames = [handsim.make_hand_frame(RIGHT, [0, 0.9, -0.3, 0, 0, 0, 1], curl=c) for c in np.linspace(0, 0.6, 20)]
+    path = bvh.write_bvh(tmp_path / "close.bvh", frames, frame_time=1 / 30)
+    out = tmp_path / "out"
+    assert replay.main([str(path), "--scene", "free_box", "--out", str(out), "--save"]) == 0
+    assert (out / "close_free_box.png").stat().st_size > 10000
+    summary = (out / "close.txt").read_text()
+    assert "close on free_box: 38 steps" in summary and "all state finite: True" in summary
+    assert replay.main([str(out / "close_free_box.npz"), "--out", str(out)]) == 0
+    assert "state hashes match the recording: True" in (out / "close_free_box.txt").read_text()
+
+
+# --- Real recorded motion --------------------------------------------------------------------------------
+
+# The confidence-demo session is 10 s long and in the folder four times (full, 1/2, 1/4, 1/8 of its frames):
+# the eighth-res copy replays in full, the other three for their first 4 s (hands before the grab).
+BOUNDED = {"confidence-demo": 240, "confidence-demo-half-res": 240, "confidence-demo-quarter-res": 240}
+
+
+@pytest.mark.parametrize("name", sorted(README_COUNTS))
+def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings):
+    from handsim import input_report
+    motion = replay.motion_from_leap(leap_recordings[name])
+    steps = BOUNDED.get(name)
+    jewelry = replay.run(replay.session_from_motion(motion, "jewelry_box"), name, steps=steps)
+    free = replay.run(replay.session_from_motion(motion, "free_box"), name, steps=steps)
+    assert jewelry.finite and free.finite
+    assert jewelry.max_hinge_violation_m <= 1e-6 and -0.5 <= jewelry.max_lid_deg <= 90.5
+    if steps is None:
+        checks = input_report.expectations(motion, jewelry, free)
+        missed = {k for k, ok in checks.items() if not ok}
+        # docs/input.md, "Shortfalls": the recorded grabs of these two files close in the air above the cube
+        # without the opposing contacts of a grasp; the clapping hand's fingertips dig into the cube's top and
+        # the deep contacts read as a grasp. Any other miss, or one of these turning into a pass, fails here
+        # so that the doc gets updated.
+        assert missed == KNOWN_MISSES.get(name, set()), checks
+
+
+KNOWN_MISSES = {"grab": {"cube grasped", "not before the closure"},
+                "confidence2": {"cube grasped", "not before the closure"},
+                "three-claps": {"no grasp of the cube", "no grasp of the lid"}}
