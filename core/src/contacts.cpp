@@ -1,6 +1,6 @@
 // Closed-form particle contacts: the default narrow phase. Each centre is taken into the body frame, the
 // signed distance to the shape and the closest surface point are computed there, and results go back to world.
-#include "handsim/hand.h"
+#include "contacts.h"
 
 #include "validate.h"
 
@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace handsim {
 namespace {
@@ -231,6 +232,27 @@ void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const Pre
 void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const ShapeDef& shape,
                        const Pose& body_pose, std::vector<ParticleContact>& out) {
   collide_particles(centres, radius, prepare_shape(shape), body_pose, out);
+}
+
+bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, Vec3& normal, double& offset) {
+  double best = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Vec3& n, double d) {  // plane n . x = d; going back along -u leaves through it?
+    const double away = -n.dot(u);
+    if (away <= 0) return;
+    const double t = (d - n.dot(l)) / away;
+    if (t < best) {
+      best = t;
+      normal = n;
+      offset = d;
+    }
+  };
+  if (ps.shape.type == ShapeType::Box) {
+    for (int k = 0; k < 3; ++k)
+      for (double side : {-1.0, 1.0}) consider(side * Vec3::Unit(k), ps.shape.half_extents[k]);
+  } else if (ps.shape.type == ShapeType::ConvexHull) {
+    for (const Eigen::Vector4d& p : ps.planes) consider(p.head<3>(), p[3]);
+  }
+  return std::isfinite(best);
 }
 
 void shape_world_bounds(const ShapeDef& shape, const Pose& pose, Vec3& lo, Vec3& hi) {

@@ -1,6 +1,7 @@
 // One frame: Algorithm 1 of Kim & Park, read top-down in World::step. The math of each stage lives in the
 // file named after it (skinning, contacts, deformation, grasp, pose_fit, joint_solvers); this file is the
 // glue that runs the stages over the world's hands and bodies.
+#include "contacts.h"
 #include "pose_fit.h"
 #include "validate.h"
 #include "world_impl.h"
@@ -85,31 +86,41 @@ namespace {
 
 // Contact persistence through thin bodies. The closed form answers with the *nearest* face, so a particle
 // pushed more than half-way into a 1.5 cm lid is answered with the far face and pushes the lid the wrong way
-// (the experiments saw a lid held past its limit slammed shut at 650 deg/s, and a lid falling onto a still
-// hand grasped through normals flipped this way). A particle keeps the face it entered through for as long
-// as its centre stays inside the body, and its contact is measured against that face's plane. The face is
-// taken afresh whenever the centre is outside (a finger sliding around an edge changes face legitimately).
-void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Pose& body_pose,
-                      const std::vector<EntryFace>& previous, std::vector<EntryFace>& faces,
-                      std::vector<ParticleContact>& contacts) {
+// (the experiments saw a lid held past its limit slammed shut at 650 deg/s, and a clapping hand grasped a
+// cube through normals flipped this way). A particle keeps the face it entered through for as long as its
+// centre stays inside the body, and its contact is measured against that face's plane. The face is taken
+// afresh whenever the centre is outside (a finger sliding round an edge changes face legitimately); a
+// centre already inside at its first contact (a fast hand, a falling lid) takes the face it crossed, found
+// by going back along its velocity relative to the body.
+void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body& body,
+                      const HandMotionHistory& hand, const std::vector<EntryFace>& previous,
+                      std::vector<EntryFace>& faces, std::vector<ParticleContact>& contacts) {
   faces.clear();
   if (contacts.empty()) return;
-  const Mat3 R = body_pose.orientation.normalized().toRotationMatrix();
+  const Pose& pose = body.pose;
+  const Mat3 R = pose.orientation.normalized().toRotationMatrix();
   auto prev = previous.begin();
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
     while (prev != previous.end() && prev->particle < c.particle) ++prev;
-    const Vec3 l = R.transpose() * (centres.col(c.particle) - body_pose.position);
+    const Vec3 x = centres.col(c.particle);
+    const Vec3 l = R.transpose() * (x - pose.position);
     const bool inside = c.depth > radius;  // the centre is behind the surface
+    EntryFace face{c.particle, R.transpose() * c.normal, 0};
+    face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
+    bool replaced = false;
     if (inside && prev != previous.end() && prev->particle == c.particle) {
-      const double distance = prev->normal.dot(l) - prev->offset;  // < 0 behind the entry face
-      c.normal = R * prev->normal;
-      c.point = R * (l - distance * prev->normal) + body_pose.position;
-      c.depth = radius - distance;
-      faces.push_back(*prev);
-      continue;
+      face = *prev;
+      replaced = true;
+    } else if (inside && hand.has_velocity()) {
+      const Vec3 relative = hand.point_velocity(x) - body.linear - body.angular.cross(x - pose.position);
+      replaced = entry_face(body.prepared, l, R.transpose() * relative, face.normal, face.offset);
     }
-    const Vec3 n = R.transpose() * c.normal;
-    faces.push_back({c.particle, n, n.dot(R.transpose() * (c.point - body_pose.position))});
+    faces.push_back(face);
+    if (!replaced) continue;
+    const double distance = face.normal.dot(l) - face.offset;  // < 0 behind the face
+    c.normal = R * face.normal;
+    c.point = R * (l - distance * face.normal) + pose.position;
+    c.depth = radius - distance;
   }
 }
 
@@ -160,7 +171,7 @@ std::string World::Impl::detect_contacts() {
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
       if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0, {}, {}}).first;
-      keep_entry_faces(h.state.tracked_positions, radius, b.pose, it->second.previous_faces,
+      keep_entry_faces(h.state.tracked_positions, radius, b, h.history, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
       touching += !it->second.contacts.empty();

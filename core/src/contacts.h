@@ -1,0 +1,14 @@
+// Contact helpers the world needs beyond collide_particles (hand.h): internal, not part of the public API.
+#pragma once
+
+#include "handsim/hand.h"
+
+namespace handsim {
+
+// The face through which a point now at body-local `l`, inside the shape, came in while moving with
+// body-local velocity `u` relative to the body: the first face the ray l - t u (t > 0) leaves through, as
+// a plane normal . x = offset (normal outward, unit). Boxes and convex hulls only, the shapes thin enough to
+// be crossed past their middle in one frame; false for other shapes or u = 0 (keep the nearest face then).
+bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, Vec3& normal, double& offset);
+
+}  // namespace handsim
