@@ -34,7 +34,7 @@ _GRASP_FIELDS = ("cos_threshold", "frames_to_grasp", "frames_to_release", "relea
 _WORLD_FIELDS = ("fixed_substep", "max_substeps", "ground", "ground_friction", "ground_height",
                  "joint_max_iterations", "solver_iterations", "paper_pipeline")
 _HAND_FIELDS = ("particle_count", "seed", "particle_radius", "render_vertices")
-EDIT_OPS = ("set_body_pose", "set_body_velocity", "set_joint_value")
+EDIT_OPS = ("set_body_pose", "set_body_velocity", "set_joint_value", "add_box", "remove_body")
 
 
 class RecordingError(ValueError):
@@ -214,6 +214,15 @@ def apply_edit(world, scene, edit: dict):
         world.set_body_velocity(scene[edit["body"]], edit["linear"], edit["angular"])
     elif op == "set_joint_value":
         world.set_joint_value(scene[edit["joint"]], edit["value"])
+    elif op == "add_box":
+        if edit["body"] in scene.objects:
+            raise RecordingError(f"edit: add_box: the scene already has an object named {edit['body']!r}")
+        d = _core.BodyDef(shape=_core.Shape.box(edit["half_extents"]), mass=edit["mass"], pose=edit["pose"])
+        d.friction = edit["friction"]
+        scene.objects[edit["body"]] = world.add_body(d)
+    elif op == "remove_body":
+        world.remove_body(scene[edit["body"]])
+        del scene.objects[edit["body"]]
     else:
         raise RecordingError(f"edit: unknown op {op!r} (known: {EDIT_OPS})")
 
@@ -272,6 +281,17 @@ class Recorder:
 
     def set_joint_value(self, joint: str, value: float):
         self._edit({"op": "set_joint_value", "joint": joint, "value": float(value)})
+
+    def add_box(self, body: str, half_extents, pose, mass: float = 1.0, friction: float = 0.5):
+        """Adds a box body named `body` to the scene (mass 0: static); later edits can name it."""
+        if not isinstance(body, str) or not body:
+            raise TypeError(f"body: expected a non-empty name, got {body!r}")
+        self._edit({"op": "add_box", "body": body, "half_extents": [float(v) for v in np.asarray(half_extents, float)],
+                    "pose": [float(v) for v in np.asarray(pose, float)], "mass": float(mass),
+                    "friction": float(friction)})
+
+    def remove_body(self, body: str):
+        self._edit({"op": "remove_body", "body": body})
 
     @property
     def recording(self) -> Recording:

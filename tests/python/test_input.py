@@ -433,12 +433,27 @@ def record_session(path):
             rec.set_joint_value("hinge", 0.2)
         if i == 20:
             rec.set_body_velocity("base", [0, 0.1, 0], [0, 0, 0])
+        if i == 30:
+            rec.add_box("weight", [0.02, 0.02, 0.02], [0.0, 0.9, -0.3, 0, 0, 0, 1], mass=0.2)
+        if i == 70:
+            rec.remove_body("weight")
         palm = box.lid_pinch_palm(world, RIGHT, 0.2 * i / 90, 0.0)
         right = handsim.make_hand_frame(RIGHT, palm, **vars_of(handsim.lid_pinch_shape()))
         frames = [right] if i % 30 else [right, skeleton.untracked(LEFT)]
         rec.step(1 / 60, frames if i != 45 else [])
     rec.save(path)
     return rec
+
+
+def test_bad_scene_edits_are_refused_and_not_recorded():
+    rec = recording.Recorder("free_box")
+    with pytest.raises(KeyError, match="has no object 'ghost'"):
+        rec.remove_body("ghost")
+    with pytest.raises(recording.RecordingError, match="already has an object named 'box'"):
+        rec.add_box("box", [0.01] * 3, [0, 1, 0, 0, 0, 0, 1])
+    with pytest.raises(handsim.Error, match="half_extents|size|extent"):
+        rec.add_box("slab", [-0.01, 0.01, 0.01], [0, 1, 0, 0, 0, 0, 1])
+    assert rec.recording.edits == [] and "slab" not in rec.scene.objects
 
 
 def vars_of(shape):
@@ -448,7 +463,8 @@ def vars_of(shape):
 def test_record_and_replay_bit_for_bit(tmp_path):
     rec = record_session(tmp_path / "s.npz")
     loaded = recording.load(tmp_path / "s.npz")
-    assert loaded.steps == 90 and [e["op"] for e in loaded.edits] == ["set_joint_value", "set_body_velocity"]
+    assert loaded.steps == 90 and [e["op"] for e in loaded.edits] == ["set_joint_value", "set_body_velocity", "add_box",
+                                                                   "remove_body"]
     with np.load(tmp_path / "s.npz") as z:  # plain numpy arrays
         assert z["positions"].dtype == np.float64 and z["positions"].shape == (90, 2, 26, 3)
         assert json.loads(str(z["header"][()]))["version"] == recording.FORMAT_VERSION
