@@ -93,42 +93,63 @@ std::vector<int> build_skin_groups(const SkinnedMesh& mesh, HandModel& model) {
   for (int i = 0; i < n; ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
 
-  model.groups.clear();
-  for (auto& a : model.bind_xyz) a.resize(n);
-  for (auto& a : model.group_weight) a.assign(n, 0.0);
+  SkinLayout& L = model.skin;
+  L.groups.clear();
+  for (auto& a : L.bind_xyz) a.resize(n);
+  for (auto& a : L.weight) a.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
     int v = order[i];
-    if (model.groups.empty() || key[order[i - 1]] != key[v]) {
+    if (L.groups.empty() || key[order[i - 1]] != key[v]) {
       SkinGroup g;
       g.begin = i;
       g.count = std::max(count[v], 1);
       for (int k = 0; k < 4; ++k) g.bones[k] = key[v][k] < 0 ? 0 : key[v][k];
-      model.groups.push_back(g);
+      L.groups.push_back(g);
     }
-    model.groups.back().end = i + 1;
-    for (int d = 0; d < 3; ++d) model.bind_xyz[d][i] = mesh.positions(d, v);
-    for (int k = 0; k < 4; ++k) model.group_weight[k][i] = w[v][k];
+    L.groups.back().end = i + 1;
+    for (int d = 0; d < 3; ++d) L.bind_xyz[d][i] = mesh.positions(d, v);
+    for (int k = 0; k < 4; ++k) L.weight[k][i] = w[v][k];
   }
   return order;
 }
 
+SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int>& particle_vertex) {
+  const int n = int(particle_vertex.size());
+  SkinLayout L;
+  for (auto& a : L.bind_xyz) a.resize(n);
+  for (auto& a : L.weight) a.resize(n);
+  size_t g = 0;  // render group of the current vertex; both sequences ascend
+  for (int p = 0; p < n; ++p) {
+    const int v = particle_vertex[p];
+    while (render.groups[g].end <= v) ++g;
+    if (L.groups.empty() || L.groups.back().bones != render.groups[g].bones ||
+        L.groups.back().count != render.groups[g].count || p == 0 || particle_vertex[p - 1] < render.groups[g].begin) {
+      SkinGroup run = render.groups[g];
+      run.begin = p;
+      L.groups.push_back(run);
+    }
+    L.groups.back().end = p + 1;
+    for (int d = 0; d < 3; ++d) L.bind_xyz[d][p] = render.bind_xyz[d][v];
+    for (int k = 0; k < 4; ++k) L.weight[k][p] = render.weight[k][v];
+  }
+  return L;
+}
+
 namespace {
 
-// One group: N influences with the same bones for every vertex, so the 12 numbers of each bone are loop
+// One group: N influences with the same bones for every point, so the 12 numbers of each bone are loop
 // invariants and the loop body is plain multiply-adds over contiguous arrays (vectorizes).
 template <int N>
-void skin_group(const SkinGroup& g, const HandModel& m, const std::array<BoneTransform, kHandJointCount>& bones,
-                double* out) {
+void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTransform, kHandJointCount>& bones,
+                double* __restrict o) {
   double b[N][12];
   for (int k = 0; k < N; ++k)
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) b[k][4 * r + c] = bones[g.bones[k]](r, c);
-  const double* __restrict x = m.bind_xyz[0].data();
-  const double* __restrict y = m.bind_xyz[1].data();
-  const double* __restrict z = m.bind_xyz[2].data();
-  const double* __restrict w[4] = {m.group_weight[0].data(), m.group_weight[1].data(), m.group_weight[2].data(),
-                                   m.group_weight[3].data()};
-  double* __restrict o = out;
+  const double* __restrict x = L.bind_xyz[0].data();
+  const double* __restrict y = L.bind_xyz[1].data();
+  const double* __restrict z = L.bind_xyz[2].data();
+  const double* __restrict w[4] = {L.weight[0].data(), L.weight[1].data(), L.weight[2].data(), L.weight[3].data()};
   for (int i = g.begin; i < g.end; ++i) {
     double ox = 0, oy = 0, oz = 0;
     for (int k = 0; k < N; ++k) {
@@ -145,18 +166,28 @@ void skin_group(const SkinGroup& g, const HandModel& m, const std::array<BoneTra
 
 }  // namespace
 
-void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
-                 Eigen::Matrix3Xd& out) {
-  out.resize(3, model.vertex_count());
-  double* o = out.data();
-  for (const SkinGroup& g : model.groups) {
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
+                 size_t first, size_t last) {
+  for (size_t i = first; i < last; ++i) {
+    const SkinGroup& g = layout.groups[i];
     switch (g.count) {
-      case 1: skin_group<1>(g, model, bones, o); break;
-      case 2: skin_group<2>(g, model, bones, o); break;
-      case 3: skin_group<3>(g, model, bones, o); break;
-      default: skin_group<4>(g, model, bones, o); break;
+      case 1: skin_group<1>(g, layout, bones, out); break;
+      case 2: skin_group<2>(g, layout, bones, out); break;
+      case 3: skin_group<3>(g, layout, bones, out); break;
+      default: skin_group<4>(g, layout, bones, out); break;
     }
   }
+}
+
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out) {
+  out.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
+  skin_layout(layout, bones, out.data(), 0, layout.groups.size());
+}
+
+void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out) {
+  skin_layout(model.skin, bones, out);
 }
 
 }  // namespace handsim

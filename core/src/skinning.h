@@ -10,16 +10,29 @@ namespace handsim {
 void compute_bone_transforms(const HandModel& model, const HandFrame& frame,
                              std::array<BoneTransform, kHandJointCount>& bones);
 
-// out.col(i) = sum_k weights(k,i) * B[bones(k,i)] * bind.col(i): the per-point path (particles).
+// out.col(i) = sum_k weights(k,i) * B[bones(k,i)] * bind.col(i): the per-point reference formula (the tests
+// compare the grouped paths against it).
 void skin_points(const Eigen::Matrix3Xd& bind, const Eigen::Matrix<int, 4, Eigen::Dynamic>& bone_ids,
                  const Eigen::Matrix4Xd& weights, const std::array<BoneTransform, kHandJointCount>& bones,
                  Eigen::Matrix3Xd& out);
 
 // Sorts the vertices by their set of bones (stable, so neighbours stay together) and returns the permutation
-// order[new] = old, with the groups and the SoA arrays of the model filled in that order.
+// order[new] = old, with model.skin filled in that order.
 std::vector<int> build_skin_groups(const SkinnedMesh& mesh, HandModel& model);
 
-// The render path: grouped, no gathers in the inner loop. out is 3 x vertex_count.
+// The particles' layout: each particle takes its vertex's render group, bones and weights, so a particle is
+// skinned with exactly the arithmetic of its render vertex (the two agree bit for bit). particle_vertex is
+// ascending, so particles of one render group are consecutive and form one run.
+SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int>& particle_vertex);
+
+// Grouped skinning of groups [first, last) of a layout into out (3 x point count, column-major). Groups write
+// disjoint columns, so ranges can run on different threads and give the same bits.
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
+                 size_t first, size_t last);
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out);
+
+// The render path: model.skin, no gathers in the inner loop. out is 3 x vertex_count.
 void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
                  Eigen::Matrix3Xd& out);
 
