@@ -1,7 +1,9 @@
 #include "skinning.h"
 
 #include <algorithm>
+#include <limits>
 #include <map>
+#include <thread>
 
 namespace handsim {
 namespace {
@@ -122,8 +124,9 @@ SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int
   for (int p = 0; p < n; ++p) {
     const int v = particle_vertex[p];
     while (render.groups[g].end <= v) ++g;
-    if (L.groups.empty() || L.groups.back().bones != render.groups[g].bones ||
-        L.groups.back().count != render.groups[g].count || p == 0 || particle_vertex[p - 1] < render.groups[g].begin) {
+    // A new run at each render group, and every kMaxParticleRun particles: the runs' boxes are the contact
+    // prefilter, and short runs of one group keep those boxes tight (the arithmetic is the same either way).
+    if (p == 0 || particle_vertex[p - 1] < render.groups[g].begin || p - L.groups.back().begin >= kMaxParticleRun) {
       SkinGroup run = render.groups[g];
       run.begin = p;
       L.groups.push_back(run);
@@ -137,11 +140,25 @@ SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int
 
 namespace {
 
+// Min and max of each coordinate over `count` interleaved xyz points.
+void group_box(const double* p, int count, double* box) {
+  double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
+  for (int i = 1; i < count; ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[3 * i + d]);
+      hi[d] = std::max(hi[d], p[3 * i + d]);
+    }
+  for (int d = 0; d < 3; ++d) {
+    box[d] = lo[d];
+    box[3 + d] = hi[d];
+  }
+}
+
 // One group: N influences with the same bones for every point, so the 12 numbers of each bone are loop
 // invariants and the loop body is plain multiply-adds over contiguous arrays (vectorizes).
 template <int N>
 void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTransform, kHandJointCount>& bones,
-                double* __restrict o) {
+                double* __restrict o, double* box) {
   double b[N][12];
   for (int k = 0; k < N; ++k)
     for (int r = 0; r < 3; ++r)
@@ -162,32 +179,83 @@ void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTr
     o[3 * i + 1] = oy;
     o[3 * i + 2] = oz;
   }
+  if (box) group_box(o + 3 * g.begin, g.end - g.begin, box);
 }
 
 }  // namespace
 
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
-                 size_t first, size_t last) {
+                 size_t first, size_t last, double* bounds) {
   for (size_t i = first; i < last; ++i) {
     const SkinGroup& g = layout.groups[i];
+    double* box = bounds ? bounds + 6 * i : nullptr;
     switch (g.count) {
-      case 1: skin_group<1>(g, layout, bones, out); break;
-      case 2: skin_group<2>(g, layout, bones, out); break;
-      case 3: skin_group<3>(g, layout, bones, out); break;
-      default: skin_group<4>(g, layout, bones, out); break;
+      case 1: skin_group<1>(g, layout, bones, out, box); break;
+      case 2: skin_group<2>(g, layout, bones, out, box); break;
+      case 3: skin_group<3>(g, layout, bones, out, box); break;
+      default: skin_group<4>(g, layout, bones, out, box); break;
     }
   }
 }
 
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
-                 Eigen::Matrix3Xd& out) {
+                 Eigen::Matrix3Xd& out, std::vector<double>* bounds) {
   out.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
-  skin_layout(layout, bones, out.data(), 0, layout.groups.size());
+  if (bounds) bounds->resize(6 * layout.groups.size());
+  skin_layout(layout, bones, out.data(), 0, layout.groups.size(), bounds ? bounds->data() : nullptr);
+}
+
+void skin_layout_parallel(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                          Eigen::Matrix3Xd& out, int threads) {
+  const size_t n = layout.bind_xyz[0].size(), groups = layout.groups.size();
+  out.resize(3, Eigen::Index(n));
+#ifdef HANDSIM_NO_THREADS
+  threads = 1;  // built without threads: the setting is accepted and one thread does the work
+#endif
+  threads = std::max(1, std::min<int>(threads, int(groups)));
+  if (threads == 1) return skin_layout(layout, bones, out.data(), 0, groups);
+  // Cut the group list where the running point count passes k * n / threads: equal work per thread.
+  std::vector<size_t> cut(threads + 1, groups);
+  cut[0] = 0;
+  for (size_t g = 0, t = 1; g < groups && t < size_t(threads); ++g)
+    if (size_t(layout.groups[g].end) * threads >= t * n) cut[t++] = g + 1;
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t)
+    pool.emplace_back([&, t] { skin_layout(layout, bones, out.data(), cut[t], cut[t + 1]); });
+  skin_layout(layout, bones, out.data(), cut[0], cut[1]);
+  for (std::thread& th : pool) th.join();
 }
 
 void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
-                 Eigen::Matrix3Xd& out) {
-  skin_layout(model.skin, bones, out);
+                 Eigen::Matrix3Xd& out, int threads) {
+  skin_layout_parallel(model.skin, bones, out, threads);
+}
+
+HandReach build_hand_reach(const HandModel& model) {
+  HandReach r;
+  r.reach.fill(-1.0);
+  for (int j = 0; j < kHandJointCount; ++j) r.bind_joint[j] = model.bind.joints[j].position;
+  const SkinLayout& L = model.particle_skin;
+  for (const SkinGroup& g : L.groups)
+    for (int k = 0; k < g.count; ++k)
+      for (int i = g.begin; i < g.end; ++i) {
+        const Vec3 p(L.bind_xyz[0][i], L.bind_xyz[1][i], L.bind_xyz[2][i]);
+        double& reach = r.reach[g.bones[k]];
+        reach = std::max(reach, (p - r.bind_joint[g.bones[k]]).norm() + model.particle_radius);
+      }
+  return r;
+}
+
+void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
+                            Vec3& lo, Vec3& hi) {
+  lo.setConstant(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (int k = 0; k < kHandJointCount; ++k) {
+    if (reach.reach[k] < 0) continue;
+    const Vec3 c = bones[k].leftCols<3>() * reach.bind_joint[k] + bones[k].col(3);
+    lo = lo.cwiseMin(c - Vec3::Constant(reach.reach[k]));
+    hi = hi.cwiseMax(c + Vec3::Constant(reach.reach[k]));
+  }
 }
 
 }  // namespace handsim

@@ -158,7 +158,7 @@ TEST(HandSkinning, GroupedParticlesAreTheirRenderVerticesBitForBit) {
     def.sampling = sampling;
     def.particle_count = 3000;
     const HandModel m = build_hand_model(def);
-    EXPECT_LE(m.particle_skin.groups.size(), m.skin.groups.size());
+    EXPECT_LE(m.particle_skin.groups.size(), m.skin.groups.size() + size_t(m.particle_count() / kMaxParticleRun));
     for (int trial = 0; trial < 6; ++trial) {
       HandPoseParams p;
       p.curl = {0.15 * trial, 0.1 * trial, 0.2 * trial, 0.05 * trial, 0.17 * trial};
@@ -179,6 +179,46 @@ TEST(HandSkinning, GroupedParticlesAreTheirRenderVerticesBitForBit) {
       }
       EXPECT_LE((naive - s.tracked_positions).cwiseAbs().maxCoeff(), 1e-15) << "trial " << trial;
     }
+  }
+}
+
+// The multi-threaded render skinning splits the groups between threads; each vertex is still computed by the
+// same code, so every thread count gives the same bits as one thread.
+TEST(HandSkinning, ThreadedRenderSkinningIsBitIdenticalToOneThread) {
+  const HandModel& m = right_model();
+  HandPoseParams p;
+  p.curl = {0.2, 0.4, 0.6, 0.8, 0.9};
+  HandState s;
+  pose_hand(m, make_hand_frame(Handedness::Right, some_pose(), p), s);
+  Eigen::Matrix3Xd one;
+  skin_groups(m, s.bones, one, 1);
+  for (int threads : {2, 3, 7, 64}) {
+    Eigen::Matrix3Xd many = Eigen::Matrix3Xd::Constant(3, 5, 42.0);  // wrong size on purpose: resized
+    skin_groups(m, s.bones, many, threads);
+    ASSERT_EQ(many.cols(), one.cols());
+    EXPECT_EQ(std::memcmp(many.data(), one.data(), sizeof(double) * one.size()), 0) << threads << " threads";
+  }
+}
+
+// The coarse box from the bones alone holds every particle sphere, for any pose (it decides whether a hand
+// skips skinning its particles, so it must never be too small).
+TEST(HandSkinning, CoarseBoundsHoldEveryParticle) {
+  const HandModel& m = right_model();
+  const HandReach reach = build_hand_reach(m);
+  for (int trial = 0; trial < 8; ++trial) {
+    HandPoseParams p;
+    p.curl = {0.12 * trial, 0.13 * trial, 0.1 * trial, 0.11 * trial, 0.125 * trial};
+    p.thumb_opposition = 0.12 * trial;
+    p.spread = 0.5 - 0.15 * trial;
+    HandFrame f = make_hand_frame(Handedness::Right, some_pose(), p);
+    if (trial % 3 == 0) f.joints[kMiddleIntermediate].valid = false;
+    HandState s;
+    pose_hand(m, f, s);
+    Vec3 lo, hi;
+    coarse_particle_bounds(reach, s.bones, lo, hi);
+    EXPECT_TRUE((lo.array() <= s.bounds_lo.array()).all()) << "trial " << trial;
+    EXPECT_TRUE((hi.array() >= s.bounds_hi.array()).all()) << "trial " << trial;
+    EXPECT_LT((hi - lo).maxCoeff(), 0.6);  // and still a hand-sized box, or it would cull nothing
   }
 }
 
