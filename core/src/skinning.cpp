@@ -5,6 +5,18 @@
 #include <map>
 #include <thread>
 
+// Runtime dispatch of the skinning loop: GCC compiles it for AVX2 and for the baseline and picks one at load
+// time, so the portable binary uses 4-wide vectors where the CPU has them. Both clones do the same IEEE
+// multiplies and adds (FMA is not enabled and contraction is off), so they give the same bits.
+#if defined(HANDSIM_SIMD_DISPATCH) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    defined(__linux__)
+#define HANDSIM_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+#define HANDSIM_INLINE inline __attribute__((always_inline))
+#else
+#define HANDSIM_SIMD_CLONES
+#define HANDSIM_INLINE inline
+#endif
+
 namespace handsim {
 namespace {
 
@@ -141,7 +153,7 @@ SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int
 namespace {
 
 // Min and max of each coordinate over `count` interleaved xyz points.
-void group_box(const double* p, int count, double* box) {
+HANDSIM_INLINE void group_box(const double* p, int count, double* box) {
   double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
   for (int i = 1; i < count; ++i)
     for (int d = 0; d < 3; ++d) {
@@ -157,7 +169,7 @@ void group_box(const double* p, int count, double* box) {
 // One group: N influences with the same bones for every point, so the 12 numbers of each bone are loop
 // invariants and the loop body is plain multiply-adds over contiguous arrays (vectorizes).
 template <int N>
-void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTransform, kHandJointCount>& bones,
+HANDSIM_INLINE void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTransform, kHandJointCount>& bones,
                 double* __restrict o, double* box) {
   double b[N][12];
   for (int k = 0; k < N; ++k)
@@ -184,6 +196,7 @@ void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTr
 
 }  // namespace
 
+HANDSIM_SIMD_CLONES
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
                  size_t first, size_t last, double* bounds) {
   for (size_t i = first; i < last; ++i) {
