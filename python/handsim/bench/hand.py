@@ -110,8 +110,8 @@ def table(result):
         (f"render skinning, {r['vertices']} vertices (first call - copy)", _us(r["skinning_median_s"]), "-"),
         ("  hand_render_vertices after a step", _us(r["first_call"]["median_s"]), _us(r["first_call"]["p99_s"])),
         ("  hand_render_vertices again (copy only)", _us(r["copy_only"]["median_s"]), _us(r["copy_only"]["p99_s"])),
-        (f"particle update, {p['particles']} particles (stage 'skinning'; no body in this world, so the lean "
-         "pipeline only poses the bones and leaves the particles for a read)", _us(p["median_s"]), _us(p["p99_s"])),
+        (f"particle update, {p['particles']} particles (stage 'skinning'; no body near: bones only)",
+         _us(p["median_s"]), _us(p["p99_s"])),
         (f"contacts in the world (stage 'contacts', {c['contacts']} contacts)",
          _us(c["world_contacts_stage"]["median_s"]), _us(c["world_contacts_stage"]["p99_s"])),
         ("  closed form, collide_particles", _us(c["closed_form"]["median_s"]), _us(c["closed_form"]["p99_s"])),
