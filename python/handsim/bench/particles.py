@@ -239,7 +239,9 @@ def report(result):
               "bigger push: the fit error is mostly the radius, not missing contacts.",
               "- Random sampling decides the lid grasp like the reference at every count measured; even "
               "(farthest-point) sampling misses it in many frames at some counts (its particles land on the finger "
-              "pads differently), so random stays the sampling.",
+              "pads differently), which the grasp column shows.",
+              "- Step times of neighbouring rows differ by less than this machine's noise, so where the rule picks "
+              "between two samplings at one count, the count is the finding, not the sampling.",
               "- The deepest visible penetration is a few millimetres at every count short of all vertices: the render "
               "mesh is pushed out only near displaced particles (falloff), so it does not choose the count.",
               "- The project default stays the paper's 1,182 random particles in this change: the issue's targets are "
