@@ -354,8 +354,11 @@ def report(result):
                      "numpy copy included)", "<= 200 us", _verdict(a_lean["render_read_median_s"], 200e-6)))
         if a_paper:
             copy_only = a_paper["render_read_median_s"]  # the paper pipeline skinned inside the step: a copy
-            rows.append(("  the same without the numpy copy (lean read - paper read, which is a copy only)",
-                         "<= 200 us", _verdict(max(a_lean["render_read_median_s"] - copy_only, 0), 200e-6)))
+            diff = a_lean["render_read_median_s"] - copy_only
+            rows.append(("  the same without the numpy copy (lean read - paper read, which is a copy only)", "<= 200 us",
+                         _verdict(diff, 200e-6) if diff > 0 else
+                         f"not measured in this run: the copy alone ({_us(copy_only)} us) took longer than the lean "
+                         f"read ({_us(a_lean['render_read_median_s'])} us), i.e. noise"))
             in_step = a_paper["stages"]["skinning"] - a_lean["stages"]["skinning"]
             rows.append(("  the same from the C++ clocks of scene (a) (paper skinning stage - lean skinning stage; "
                          "the paper's Bullet contacts evict the skinning data from the caches every step)",
@@ -436,9 +439,10 @@ def report(result):
       "in `collide_particles` over every particle of a hand near a body, in re-validating the frames, and in "
       "allocations. Each of those is now either vectorized (runs of one bone set), fused into the skinning loop "
       "(each run's box), skipped (far hands, far runs, the deformed copy when nothing was pushed) or done once. "
-      "After it, the same profile of scene (a) is led by allocations (malloc/free), the stage reports' strings and "
-      "the validation of the input frames, a few percent each; the skinning and contact functions are no longer "
-      "among the hottest.")
+      "Frame validation also built an argument name per joint (three strings, every step); it now builds them only "
+      "for a bad joint. After all this, the same profile of scene (a) has no dominant per-step function: apart "
+      "from the setup (model building), its samples spread over the Python loop, Bullet's substeps, the hinge "
+      "joint and small allocations, each a few percent at most.")
     w("")
     w("## The particle count")
     w("")
