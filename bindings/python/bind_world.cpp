@@ -107,7 +107,9 @@ void bind_defs(py::module_& m) {
       .def_readwrite("grasp", &WorldDef::grasp)
       .def_readwrite("particle_contacts", &WorldDef::particle_contacts)
       .def_readwrite("paper_pipeline", &WorldDef::paper_pipeline,
-                     "the paper's pipeline as a baseline: no culling, render skinning every step, Ceres LM");
+                     "the paper's pipeline as a baseline: no culling, render skinning every step, Ceres LM")
+      .def_readwrite("render_threads", &WorldDef::render_threads,
+                     "threads skinning the render mesh on read; bit-identical to one thread");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
 
   py::class_<BodyDef> bd(m, "BodyDef", "What to create: shape, mass (0 = static), pose, material.");

@@ -213,20 +213,27 @@ PreparedShape prepare_shape(const ShapeDef& shape, const std::string& argument) 
   return ps;
 }
 
-void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& ps,
-                       const Pose& body_pose, std::vector<ParticleContact>& out) {
+void collide_particle_ranges(const Eigen::Matrix3Xd& centres, const std::vector<std::pair<int, int>>& ranges,
+                             double radius, const PreparedShape& ps, const Pose& body_pose,
+                             std::vector<ParticleContact>& out) {
   validate::non_negative(radius, "radius");
   const Mat3 R = body_pose.orientation.normalized().toRotationMatrix();
   const Vec3 lo = ps.local_lo.array() - radius, hi = ps.local_hi.array() + radius;
-  for (Eigen::Index i = 0; i < centres.cols(); ++i) {
-    const Vec3 l = R.transpose() * (centres.col(i) - body_pose.position);
-    if ((l.array() < lo.array()).any() || (l.array() > hi.array()).any()) continue;  // cheap local bounds test
-    Closest c;
-    if (!closest_on_shape(ps, l, radius, c)) continue;
-    double depth = radius - c.sd;
-    if (depth <= 0) continue;
-    out.push_back({int(i), R * c.point + body_pose.position, R * c.normal, depth});
-  }
+  for (const auto& range : ranges)
+    for (Eigen::Index i = range.first; i < range.second; ++i) {
+      const Vec3 l = R.transpose() * (centres.col(i) - body_pose.position);
+      if ((l.array() < lo.array()).any() || (l.array() > hi.array()).any()) continue;  // cheap local bounds test
+      Closest c;
+      if (!closest_on_shape(ps, l, radius, c)) continue;
+      double depth = radius - c.sd;
+      if (depth <= 0) continue;
+      out.push_back({int(i), R * c.point + body_pose.position, R * c.normal, depth});
+    }
+}
+
+void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& ps,
+                       const Pose& body_pose, std::vector<ParticleContact>& out) {
+  collide_particle_ranges(centres, {{0, int(centres.cols())}}, radius, ps, body_pose, out);
 }
 
 void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const ShapeDef& shape,

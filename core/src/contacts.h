@@ -3,7 +3,16 @@
 
 #include "handsim/hand.h"
 
+#include <utility>
+#include <vector>
+
 namespace handsim {
+
+// collide_particles over the centres with index in one of the ascending, disjoint ranges [first, second).
+// Contacts come out in particle order, so skipping particles that cannot touch leaves the result unchanged.
+void collide_particle_ranges(const Eigen::Matrix3Xd& centres, const std::vector<std::pair<int, int>>& ranges,
+                             double radius, const PreparedShape& shape, const Pose& body_pose,
+                             std::vector<ParticleContact>& out);
 
 // The face through which a point now at body-local `l`, inside the shape, came in while moving with
 // body-local velocity `u` relative to the body: the first face the ray l - t u (t > 0) leaves through, as

@@ -3,6 +3,7 @@
 #include "validate.h"
 
 #include <algorithm>
+#include <vector>
 
 namespace handsim {
 
@@ -49,17 +50,30 @@ void apply_render_deformation(const HandModel& model, const HandState& state, Ei
   // Normalized over the displaced neighbours only: an undisplaced neighbour sits outside the object, so
   // averaging it in would pull a pressed vertex back inside. The displacement stays continuous because a
   // particle that barely penetrates is barely displaced.
-  std::vector<double> wsum(model.vertex_count(), 0.0);
-  Eigen::Matrix3Xd acc = Eigen::Matrix3Xd::Zero(3, model.vertex_count());
-  for (int p : state.displaced) {
-    Vec3 d = state.deformed_positions.col(p) - state.tracked_positions.col(p);
-    for (int e = model.falloff_begin[p]; e < model.falloff_begin[p + 1]; ++e) {
-      acc.col(model.falloff_vertex[e]) += model.falloff_weight[e] * d;
-      wsum[model.falloff_vertex[e]] += model.falloff_weight[e];
-    }
+  // Sparse: only the falloff entries of displaced particles are visited (no per-vertex arrays to clear). The
+  // entries are stably sorted by vertex, so each vertex sums its terms in the order of the displaced list.
+  struct Term {
+    int vertex, particle, entry;
+  };
+  std::vector<Term> terms;
+  for (size_t k = 0; k < state.displaced.size(); ++k) {
+    const int p = state.displaced[k];
+    for (int e = model.falloff_begin[p]; e < model.falloff_begin[p + 1]; ++e)
+      terms.push_back({model.falloff_vertex[e], p, e});
   }
-  for (int v = 0; v < model.vertex_count(); ++v)
-    if (wsum[v] > 0) out.col(v) += acc.col(v) / wsum[v];
+  std::stable_sort(terms.begin(), terms.end(), [](const Term& a, const Term& b) { return a.vertex < b.vertex; });
+  for (size_t i = 0; i < terms.size();) {
+    const int v = terms[i].vertex;
+    Vec3 acc = Vec3::Zero();
+    double wsum = 0;
+    for (; i < terms.size() && terms[i].vertex == v; ++i) {
+      const int p = terms[i].particle;
+      const double w = model.falloff_weight[terms[i].entry];
+      acc += w * (state.deformed_positions.col(p) - state.tracked_positions.col(p));
+      wsum += w;
+    }
+    if (wsum > 0) out.col(v) += acc / wsum;
+  }
 }
 
 void deform_particles(const HandModel& model, HandState& state, const std::vector<ParticleContact>& contacts) {

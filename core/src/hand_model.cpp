@@ -82,6 +82,7 @@ HandModel assemble(const HandDef& def, const SkinnedMesh& source, const std::vec
     m.particle_bones.col(p) = m.mesh.bones.col(v);
     m.particle_weights.col(p) = m.mesh.weights.col(v);
   }
+  m.particle_skin = build_particle_layout(m.skin, m.particle_vertex);
   // Hexagonal spacing s of np points over the exposed area A: each point owns (sqrt(3)/2) s^2. Spheres of
   // radius s/sqrt(3) around a hexagonal lattice cover the plane without holes, hence the default radius.
   double area = candidate_area(m.mesh, m.exposed);
@@ -119,8 +120,7 @@ void pose_hand(const HandModel& model, const HandFrame& frame, HandState& state)
     return;
   }
   compute_bone_transforms(model, frame, state.bones);
-  skin_points(model.particle_bind, model.particle_bones, model.particle_weights, state.bones,
-              state.tracked_positions);
+  skin_layout(model.particle_skin, state.bones, state.tracked_positions);
   state.deformed_positions = state.tracked_positions;
   state.displaced.clear();
   const double r = model.particle_radius;

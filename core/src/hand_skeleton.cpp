@@ -189,6 +189,12 @@ void validate_frame(const HandFrame& frame, const std::string& argument) {
   for (int j = 0; j < kHandJointCount; ++j) {
     const JointPose& jp = frame.joints[j];
     if (!jp.valid) continue;  // untracked joints may hold anything
+    // The same conditions as the checks below, without building their argument names: a good joint (every
+    // joint of every step, normally) costs no allocation; a bad one falls through to the named checks.
+    const bool good = jp.position.allFinite() && jp.orientation.coeffs().allFinite() &&
+                      std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && std::isfinite(jp.radius) &&
+                      jp.radius >= 0;
+    if (good) continue;
     std::string name = argument + ".joints[" + std::to_string(j) + "]";
     validate::finite(jp.position, name + ".position");
     validate::unit_quat(jp.orientation, name + ".orientation");

@@ -1,7 +1,21 @@
 #include "skinning.h"
 
 #include <algorithm>
+#include <limits>
 #include <map>
+#include <thread>
+
+// Runtime dispatch of the skinning loop: GCC compiles it for AVX2 and for the baseline and picks one at load
+// time, so the portable binary uses 4-wide vectors where the CPU has them. Both clones do the same IEEE
+// multiplies and adds (FMA is not enabled and contraction is off), so they give the same bits.
+#if defined(HANDSIM_SIMD_DISPATCH) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    defined(__linux__)
+#define HANDSIM_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+#define HANDSIM_INLINE inline __attribute__((always_inline))
+#else
+#define HANDSIM_SIMD_CLONES
+#define HANDSIM_INLINE inline
+#endif
 
 namespace handsim {
 namespace {
@@ -93,42 +107,78 @@ std::vector<int> build_skin_groups(const SkinnedMesh& mesh, HandModel& model) {
   for (int i = 0; i < n; ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return key[a] < key[b]; });
 
-  model.groups.clear();
-  for (auto& a : model.bind_xyz) a.resize(n);
-  for (auto& a : model.group_weight) a.assign(n, 0.0);
+  SkinLayout& L = model.skin;
+  L.groups.clear();
+  for (auto& a : L.bind_xyz) a.resize(n);
+  for (auto& a : L.weight) a.assign(n, 0.0);
   for (int i = 0; i < n; ++i) {
     int v = order[i];
-    if (model.groups.empty() || key[order[i - 1]] != key[v]) {
+    if (L.groups.empty() || key[order[i - 1]] != key[v]) {
       SkinGroup g;
       g.begin = i;
       g.count = std::max(count[v], 1);
       for (int k = 0; k < 4; ++k) g.bones[k] = key[v][k] < 0 ? 0 : key[v][k];
-      model.groups.push_back(g);
+      L.groups.push_back(g);
     }
-    model.groups.back().end = i + 1;
-    for (int d = 0; d < 3; ++d) model.bind_xyz[d][i] = mesh.positions(d, v);
-    for (int k = 0; k < 4; ++k) model.group_weight[k][i] = w[v][k];
+    L.groups.back().end = i + 1;
+    for (int d = 0; d < 3; ++d) L.bind_xyz[d][i] = mesh.positions(d, v);
+    for (int k = 0; k < 4; ++k) L.weight[k][i] = w[v][k];
   }
   return order;
 }
 
+SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int>& particle_vertex) {
+  const int n = int(particle_vertex.size());
+  SkinLayout L;
+  for (auto& a : L.bind_xyz) a.resize(n);
+  for (auto& a : L.weight) a.resize(n);
+  size_t g = 0;  // render group of the current vertex; both sequences ascend
+  for (int p = 0; p < n; ++p) {
+    const int v = particle_vertex[p];
+    while (render.groups[g].end <= v) ++g;
+    // A new run at each render group, and every kMaxParticleRun particles: the runs' boxes are the contact
+    // prefilter, and short runs of one group keep those boxes tight (the arithmetic is the same either way).
+    if (p == 0 || particle_vertex[p - 1] < render.groups[g].begin || p - L.groups.back().begin >= kMaxParticleRun) {
+      SkinGroup run = render.groups[g];
+      run.begin = p;
+      L.groups.push_back(run);
+    }
+    L.groups.back().end = p + 1;
+    for (int d = 0; d < 3; ++d) L.bind_xyz[d][p] = render.bind_xyz[d][v];
+    for (int k = 0; k < 4; ++k) L.weight[k][p] = render.weight[k][v];
+  }
+  return L;
+}
+
 namespace {
 
-// One group: N influences with the same bones for every vertex, so the 12 numbers of each bone are loop
+// Min and max of each coordinate over `count` interleaved xyz points.
+HANDSIM_INLINE void group_box(const double* p, int count, double* box) {
+  double lo[3] = {p[0], p[1], p[2]}, hi[3] = {p[0], p[1], p[2]};
+  for (int i = 1; i < count; ++i)
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], p[3 * i + d]);
+      hi[d] = std::max(hi[d], p[3 * i + d]);
+    }
+  for (int d = 0; d < 3; ++d) {
+    box[d] = lo[d];
+    box[3 + d] = hi[d];
+  }
+}
+
+// One group: N influences with the same bones for every point, so the 12 numbers of each bone are loop
 // invariants and the loop body is plain multiply-adds over contiguous arrays (vectorizes).
 template <int N>
-void skin_group(const SkinGroup& g, const HandModel& m, const std::array<BoneTransform, kHandJointCount>& bones,
-                double* out) {
+HANDSIM_INLINE void skin_group(const SkinGroup& g, const SkinLayout& L, const std::array<BoneTransform, kHandJointCount>& bones,
+                double* __restrict o, double* box) {
   double b[N][12];
   for (int k = 0; k < N; ++k)
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) b[k][4 * r + c] = bones[g.bones[k]](r, c);
-  const double* __restrict x = m.bind_xyz[0].data();
-  const double* __restrict y = m.bind_xyz[1].data();
-  const double* __restrict z = m.bind_xyz[2].data();
-  const double* __restrict w[4] = {m.group_weight[0].data(), m.group_weight[1].data(), m.group_weight[2].data(),
-                                   m.group_weight[3].data()};
-  double* __restrict o = out;
+  const double* __restrict x = L.bind_xyz[0].data();
+  const double* __restrict y = L.bind_xyz[1].data();
+  const double* __restrict z = L.bind_xyz[2].data();
+  const double* __restrict w[4] = {L.weight[0].data(), L.weight[1].data(), L.weight[2].data(), L.weight[3].data()};
   for (int i = g.begin; i < g.end; ++i) {
     double ox = 0, oy = 0, oz = 0;
     for (int k = 0; k < N; ++k) {
@@ -141,21 +191,83 @@ void skin_group(const SkinGroup& g, const HandModel& m, const std::array<BoneTra
     o[3 * i + 1] = oy;
     o[3 * i + 2] = oz;
   }
+  if (box) group_box(o + 3 * g.begin, g.end - g.begin, box);
 }
 
 }  // namespace
 
-void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
-                 Eigen::Matrix3Xd& out) {
-  out.resize(3, model.vertex_count());
-  double* o = out.data();
-  for (const SkinGroup& g : model.groups) {
+HANDSIM_SIMD_CLONES
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
+                 size_t first, size_t last, double* bounds) {
+  for (size_t i = first; i < last; ++i) {
+    const SkinGroup& g = layout.groups[i];
+    double* box = bounds ? bounds + 6 * i : nullptr;
     switch (g.count) {
-      case 1: skin_group<1>(g, model, bones, o); break;
-      case 2: skin_group<2>(g, model, bones, o); break;
-      case 3: skin_group<3>(g, model, bones, o); break;
-      default: skin_group<4>(g, model, bones, o); break;
+      case 1: skin_group<1>(g, layout, bones, out, box); break;
+      case 2: skin_group<2>(g, layout, bones, out, box); break;
+      case 3: skin_group<3>(g, layout, bones, out, box); break;
+      default: skin_group<4>(g, layout, bones, out, box); break;
     }
+  }
+}
+
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out, std::vector<double>* bounds) {
+  out.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
+  if (bounds) bounds->resize(6 * layout.groups.size());
+  skin_layout(layout, bones, out.data(), 0, layout.groups.size(), bounds ? bounds->data() : nullptr);
+}
+
+void skin_layout_parallel(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                          Eigen::Matrix3Xd& out, int threads) {
+  const size_t n = layout.bind_xyz[0].size(), groups = layout.groups.size();
+  out.resize(3, Eigen::Index(n));
+#ifdef HANDSIM_NO_THREADS
+  threads = 1;  // built without threads: the setting is accepted and one thread does the work
+#endif
+  threads = std::max(1, std::min<int>(threads, int(groups)));
+  if (threads == 1) return skin_layout(layout, bones, out.data(), 0, groups);
+  // Cut the group list where the running point count passes k * n / threads: equal work per thread.
+  std::vector<size_t> cut(threads + 1, groups);
+  cut[0] = 0;
+  for (size_t g = 0, t = 1; g < groups && t < size_t(threads); ++g)
+    if (size_t(layout.groups[g].end) * threads >= t * n) cut[t++] = g + 1;
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t)
+    pool.emplace_back([&, t] { skin_layout(layout, bones, out.data(), cut[t], cut[t + 1]); });
+  skin_layout(layout, bones, out.data(), cut[0], cut[1]);
+  for (std::thread& th : pool) th.join();
+}
+
+void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out, int threads) {
+  skin_layout_parallel(model.skin, bones, out, threads);
+}
+
+HandReach build_hand_reach(const HandModel& model) {
+  HandReach r;
+  r.reach.fill(-1.0);
+  for (int j = 0; j < kHandJointCount; ++j) r.bind_joint[j] = model.bind.joints[j].position;
+  const SkinLayout& L = model.particle_skin;
+  for (const SkinGroup& g : L.groups)
+    for (int k = 0; k < g.count; ++k)
+      for (int i = g.begin; i < g.end; ++i) {
+        const Vec3 p(L.bind_xyz[0][i], L.bind_xyz[1][i], L.bind_xyz[2][i]);
+        double& reach = r.reach[g.bones[k]];
+        reach = std::max(reach, (p - r.bind_joint[g.bones[k]]).norm() + model.particle_radius);
+      }
+  return r;
+}
+
+void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
+                            Vec3& lo, Vec3& hi) {
+  lo.setConstant(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (int k = 0; k < kHandJointCount; ++k) {
+    if (reach.reach[k] < 0) continue;
+    const Vec3 c = bones[k].leftCols<3>() * reach.bind_joint[k] + bones[k].col(3);
+    lo = lo.cwiseMin(c - Vec3::Constant(reach.reach[k]));
+    hi = hi.cwiseMax(c + Vec3::Constant(reach.reach[k]));
   }
 }
 

@@ -10,17 +10,49 @@ namespace handsim {
 void compute_bone_transforms(const HandModel& model, const HandFrame& frame,
                              std::array<BoneTransform, kHandJointCount>& bones);
 
-// out.col(i) = sum_k weights(k,i) * B[bones(k,i)] * bind.col(i): the per-point path (particles).
+// out.col(i) = sum_k weights(k,i) * B[bones(k,i)] * bind.col(i): the per-point reference formula (the tests
+// compare the grouped paths against it).
 void skin_points(const Eigen::Matrix3Xd& bind, const Eigen::Matrix<int, 4, Eigen::Dynamic>& bone_ids,
                  const Eigen::Matrix4Xd& weights, const std::array<BoneTransform, kHandJointCount>& bones,
                  Eigen::Matrix3Xd& out);
 
 // Sorts the vertices by their set of bones (stable, so neighbours stay together) and returns the permutation
-// order[new] = old, with the groups and the SoA arrays of the model filled in that order.
+// order[new] = old, with model.skin filled in that order.
 std::vector<int> build_skin_groups(const SkinnedMesh& mesh, HandModel& model);
 
-// The render path: grouped, no gathers in the inner loop. out is 3 x vertex_count.
+// The particles' layout: each particle takes its vertex's render group, bones and weights, so a particle is
+// skinned with exactly the arithmetic of its render vertex (the two agree bit for bit). particle_vertex is
+// ascending, so particles of one render group are consecutive and form one run.
+constexpr int kMaxParticleRun = 32;
+SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int>& particle_vertex);
+
+// Grouped skinning of groups [first, last) of a layout into out (3 x point count, column-major). Groups write
+// disjoint columns, so ranges can run on different threads and give the same bits. With `bounds` (6 doubles
+// per group: min x y z, max x y z), each group's box of skinned points is written too (the contact prefilter).
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
+                 size_t first, size_t last, double* bounds = nullptr);
+void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                 Eigen::Matrix3Xd& out, std::vector<double>* bounds = nullptr);
+
+// skin_layout split over `threads` std::threads (the calling one included) by point count. Every point is
+// computed by the same code whichever thread runs it, so the result is bit-identical to one thread.
+void skin_layout_parallel(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
+                          Eigen::Matrix3Xd& out, int threads);
+
+// The render path: model.skin, no gathers in the inner loop. out is 3 x vertex_count.
 void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones,
-                 Eigen::Matrix3Xd& out);
+                 Eigen::Matrix3Xd& out, int threads = 1);
+
+// A box sure to hold every particle sphere of the hand, from the bone transforms alone (no skinning): B_k is
+// rigid, so B_k p lies within |p - j_k| of B_k j_k (j_k: bind position of joint k), and a blend of such points
+// lies in the box around those balls. reach[k] = max over particles influenced by bone k of |p - j_k|, plus
+// the particle radius; < 0 for a bone no particle uses.
+struct HandReach {
+  std::array<Vec3, kHandJointCount> bind_joint;
+  std::array<double, kHandJointCount> reach;
+};
+HandReach build_hand_reach(const HandModel& model);
+void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
+                            Vec3& lo, Vec3& hi);
 
 }  // namespace handsim

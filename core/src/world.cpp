@@ -42,6 +42,8 @@ void validate_world_def(const WorldDef& def) {
     validate::fail("world.joint_max_iterations",
                    "must be in 1..10000, got " + std::to_string(def.joint_max_iterations));
   validate_grasp_settings(def.grasp);
+  if (def.render_threads < 1 || def.render_threads > 64)
+    validate::fail("world.render_threads", "must be in 1..64, got " + std::to_string(def.render_threads));
   if (int(def.particle_contacts) < 0 || int(def.particle_contacts) > 1)
     validate::fail("world.particle_contacts", "unknown method " + std::to_string(int(def.particle_contacts)));
 }
@@ -202,6 +204,8 @@ HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel
   h.state.tracked = false;
   h.state.tracked_positions = h.model->particle_bind;
   h.state.deformed_positions = h.model->particle_bind;
+  h.reach = build_hand_reach(*h.model);
+  h.particles_current = h.deformed_current = true;
   return {index, h.generation};
 }
 
@@ -231,17 +235,17 @@ const HandModel& World::hand_model(HandId id) const { return *impl_->hand(id).mo
 bool World::hand_tracked(HandId id) const { return impl_->hand(id).state.tracked; }
 Pose World::hand_palm_pose(HandId id) const { return impl_->hand(id).palm; }
 
+// Logically const: a hand far from every body skipped skinning its particles in the step, and reading them
+// here fills that cache (the pimpl pointer lets a const accessor update it).
 const Eigen::Matrix3Xd& World::hand_particles(HandId id, bool deformed) const {
-  const HandSlot& h = impl_->hand(id);
+  HandSlot& h = impl_->hand(id);
+  impl_->refresh_particles(h, deformed);
   return deformed ? h.state.deformed_positions : h.state.tracked_positions;
 }
 
 const Eigen::Matrix3Xd& World::hand_render_vertices(HandId id) {
   HandSlot& h = impl_->hand(id);
-  if (h.render_dirty) {
-    skin_render(*h.model, h.state, h.render);
-    h.render_dirty = false;
-  }
+  if (h.render_dirty) impl_->skin_render_mesh(h);
   return h.render;
 }
 Pose World::body_pose(BodyId id) const { return impl_->body(id).pose; }

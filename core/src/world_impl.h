@@ -7,6 +7,7 @@
 #include "grasp.h"
 #include "bullet_particles.h"
 #include "joint_solvers.h"
+#include "skinning.h"
 #include "validate.h"
 
 #include <map>
@@ -91,6 +92,12 @@ struct HandSlot {
   bool has_pose = false;  // a tracked frame has been seen
   Eigen::Matrix3Xd render;
   bool render_dirty = true;
+  // Lazy particles: a hand whose coarse bounds (from the bones, before skinning) are far from every body skips
+  // skinning its particles; state.bones are kept, and the particles are skinned when something reads them.
+  HandReach reach;                  // built once from the model
+  bool particles_current = true;    // state.tracked_positions belong to the last tracked frame
+  bool deformed_current = true;     // state.deformed_positions hold this frame's deformation (else == tracked)
+  std::vector<double> group_bounds; // box of each particle group's centres (6 per group), when current
   // ParticleContacts::BulletObjects: this hand's particles as Bullet objects, rebuilt when bodies change.
   std::unique_ptr<BulletParticleCollider> bullet_particles;
   std::vector<uint32_t> bullet_bodies;  // body slot of each collider body
@@ -165,6 +172,11 @@ struct World::Impl {
   uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
+  // Lazy particles (world_step.cpp): skin now / on read, and the coarse test that decides.
+  void skin_particles(HandSlot& h);
+  void refresh_particles(HandSlot& h, bool deformed);
+  bool near_any_body(const Vec3& lo, const Vec3& hi) const;
+  void skin_render_mesh(HandSlot& h);
 
   // Grasp bookkeeping (world_step.cpp).
   void begin_grasp(uint32_t hand, uint32_t body);
@@ -181,6 +193,8 @@ struct World::Impl {
   std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
   std::string detect_contacts();
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
+  void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
+                            std::vector<std::pair<int, int>>& ranges) const;
   std::string deform_hands();
   std::string decide_grasps(double dt);
   std::string follow_primary_hands();

@@ -2,12 +2,14 @@
 // file named after it (skinning, contacts, deformation, grasp, pose_fit, joint_solvers); this file is the
 // glue that runs the stages over the world's hands and bodies.
 #include "contacts.h"
+#include "deformation.h"
 #include "pose_fit.h"
 #include "validate.h"
 #include "world_impl.h"
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 
 namespace handsim {
 
@@ -56,7 +58,7 @@ void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames)
 
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
 std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
-  int tracked = 0;
+  int tracked = 0, skinned = 0;
   size_t k = 0;
   for (HandSlot& h : hands) {
     if (!h.alive) continue;
@@ -67,19 +69,71 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
       continue;
     }
-    pose_hand(*h.model, *frame, h.state);
+    // The frame was validated by validate_step: pose the bones, then skin the particles only when the hand's
+    // coarse bounds come near a body (the paper: always).
+    compute_bone_transforms(*h.model, *frame, h.state.bones);
+    h.state.tracked = true;
+    h.state.displaced.clear();
+    h.deformed_current = false;
+    h.particles_current = false;
+    coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
+    if (def.paper_pipeline || near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+      skin_particles(h);
+      ++skinned;
+    }
     h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
     h.render_dirty = true;
-    if (def.paper_pipeline) {  // the paper skins the whole mesh every frame, needed or not
-      skin_render(*h.model, h.state, h.render);
-      h.render_dirty = false;
-    }
+    if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;
   }
   if (tracked == 0) return "skip: no tracked hand";
-  return std::to_string(tracked) + " tracked hand(s)";
+  return std::to_string(tracked) + " tracked hand(s), " + std::to_string(skinned) +
+         " near a body (particles skinned), " + std::to_string(tracked - skinned) + " far (particles left unskinned)";
+}
+
+// Eq. 1 for the particles, with the box of each particle group for the contact prefilter; the hand's bounds
+// become the exact box of its particle spheres.
+void World::Impl::skin_particles(HandSlot& h) {
+  const HandModel& m = *h.model;
+  skin_layout(m.particle_skin, h.state.bones, h.state.tracked_positions, &h.group_bounds);
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (size_t g = 0; g < m.particle_skin.groups.size(); ++g) {
+    lo = lo.cwiseMin(Eigen::Map<const Vec3>(&h.group_bounds[6 * g]));
+    hi = hi.cwiseMax(Eigen::Map<const Vec3>(&h.group_bounds[6 * g + 3]));
+  }
+  h.state.bounds_lo = lo.array() - m.particle_radius;
+  h.state.bounds_hi = hi.array() + m.particle_radius;
+  h.particles_current = true;
+}
+
+// Brings the lazily skipped particle positions up to date (same arithmetic as in the step, so same bits).
+void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
+  if (!h.particles_current) skin_particles(h);
+  if (deformed && !h.deformed_current) {
+    h.state.deformed_positions = h.state.tracked_positions;  // no particle was displaced this frame
+    h.deformed_current = true;
+  }
+}
+
+// Whether a box (a hand's coarse bounds) comes within the release distance of any body's bounds: the widest
+// margin detect_contacts uses, so a hand that fails this test cannot have a contact.
+bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
+  const Vec3 margin = Vec3::Constant(def.grasp.release_distance);
+  for (const Body& b : bodies) {
+    if (!b.alive) continue;
+    Vec3 blo, bhi;
+    shape_world_bounds(b.shape, b.pose, blo, bhi);
+    if (bounds_overlap(lo - margin, hi + margin, blo, bhi)) return true;
+  }
+  return false;
+}
+
+void World::Impl::skin_render_mesh(HandSlot& h) {
+  skin_groups(*h.model, h.state.bones, h.render, def.render_threads);
+  apply_render_deformation(*h.model, h.state, h.render);  // reads only displaced particles, which are current
+  h.render_dirty = false;
 }
 
 namespace {
@@ -135,12 +189,14 @@ std::string World::Impl::detect_contacts() {
   }
   std::vector<ParticleContact> found;
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
+  std::vector<std::pair<int, int>> ranges;
   const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
-  int tested = 0, touching = 0;
+  int tested = 0, touching = 0, candidates = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
     if (!h.alive || !h.state.tracked) continue;
     const double radius = h.model->particle_radius;
+    if (bullet || def.paper_pipeline) refresh_particles(h, false);
     if (bullet) collide_bullet_particles(hi, per_body);
     for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
       Body& b = bodies[bi];
@@ -164,7 +220,11 @@ std::string World::Impl::detect_contacts() {
         std::stable_sort(found.begin(), found.end(),
                          [](const ParticleContact& a, const ParticleContact& b) { return a.particle < b.particle; });
       } else {
-        collide_particles(h.state.tracked_positions, radius + margin, b.prepared, b.pose, found);
+        refresh_particles(h, false);  // a no-op: a hand near a body was skinned in pose_hands
+        if (def.paper_pipeline) ranges.assign(1, {0, int(h.state.tracked_positions.cols())});
+        else near_particle_ranges(h, radius + margin, lo, hi_b, ranges);
+        for (const auto& r : ranges) candidates += r.second - r.first;
+        collide_particle_ranges(h.state.tracked_positions, ranges, radius + margin, b.prepared, b.pose, found);
         for (ParticleContact& c : found) c.depth -= margin;  // true depth; held contacts may be slightly < 0
       }
       auto key = std::make_pair(hi, bi);
@@ -178,7 +238,25 @@ std::string World::Impl::detect_contacts() {
     }
   }
   if (tested == 0) return "skip: no hand near a body";
-  return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching";
+  return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching, " +
+         std::to_string(candidates) + " particle(s) in groups near a body tested";
+}
+
+// The particle index ranges whose group box, grown by the contact reach, overlaps a body's world box: the
+// particles of the other groups are farther than `reach` from the body's bounds, so they cannot touch it.
+void World::Impl::near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
+                                       std::vector<std::pair<int, int>>& ranges) const {
+  ranges.clear();
+  // A little slack over the reach, so a centre exactly at the reach is never dropped by rounding.
+  const Vec3 grow = Vec3::Constant(reach * (1 + 1e-9) + 1e-12);
+  const std::vector<SkinGroup>& groups = h.model->particle_skin.groups;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    const Vec3 lo = Eigen::Map<const Vec3>(&h.group_bounds[6 * g]) - grow;
+    const Vec3 hi = Eigen::Map<const Vec3>(&h.group_bounds[6 * g + 3]) + grow;
+    if (!bounds_overlap(lo, hi, body_lo, body_hi)) continue;
+    if (!ranges.empty() && ranges.back().second == groups[g].begin) ranges.back().second = groups[g].end;
+    else ranges.push_back({groups[g].begin, groups[g].end});
+  }
 }
 
 // The paper's narrow phase: the hand's particles as Bullet sphere objects (radius + release margin) in a
@@ -216,7 +294,14 @@ std::string World::Impl::deform_hands() {
     for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it)
       for (const ParticleContact& c : it->second.contacts)
         if (c.depth > 0) all.push_back(c);
+    if (all.empty() && !def.paper_pipeline) {
+      h.state.displaced.clear();  // deformed == tracked; the copy is made only if someone reads it
+      h.deformed_current = false;
+      continue;
+    }
+    refresh_particles(h, false);
     deform_particles(*h.model, h.state, all);
+    h.deformed_current = true;
     deformed += int(h.state.displaced.size());
   }
   if (deformed == 0) return "skip: no particle inside a body";

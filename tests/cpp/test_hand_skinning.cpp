@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <map>
 
 using namespace handsim;
@@ -145,8 +146,80 @@ TEST(HandSkinning, GroupedRenderPathEqualsPerVertexPath) {
   skin_points(m.mesh.positions, m.mesh.bones, m.mesh.weights, s.bones, naive);
   EXPECT_LE((grouped - naive).cwiseAbs().maxCoeff(), 1e-13);
   int four = 0;
-  for (const SkinGroup& g : m.groups) four += g.count == 4 ? g.end - g.begin : 0;
+  for (const SkinGroup& g : m.skin.groups) four += g.count == 4 ? g.end - g.begin : 0;
   EXPECT_GT(four, 0);
+}
+
+// The particles go through the grouped path with their vertices' render weights: a tracked particle is its
+// render vertex bit for bit, and both stay within rounding of the per-point formula.
+TEST(HandSkinning, GroupedParticlesAreTheirRenderVerticesBitForBit) {
+  for (ParticleSampling sampling : {ParticleSampling::Random, ParticleSampling::Even}) {
+    HandDef def;
+    def.sampling = sampling;
+    def.particle_count = 3000;
+    const HandModel m = build_hand_model(def);
+    EXPECT_LE(m.particle_skin.groups.size(), m.skin.groups.size() + size_t(m.particle_count() / kMaxParticleRun));
+    for (int trial = 0; trial < 6; ++trial) {
+      HandPoseParams p;
+      p.curl = {0.15 * trial, 0.1 * trial, 0.2 * trial, 0.05 * trial, 0.17 * trial};
+      p.thumb_opposition = 0.1 * trial;
+      p.spread = 0.3 - 0.1 * trial;
+      HandFrame f = make_hand_frame(Handedness::Right, some_pose(), p);
+      f.joints[kRingMetacarpal].position += Vec3(0.001 * trial, -0.003, 0.002);
+      if (trial % 2) f.joints[kIndexDistal].valid = false;
+      HandState s;
+      pose_hand(m, f, s);
+      Eigen::Matrix3Xd render, naive;
+      skin_render(m, s, render);
+      skin_points(m.particle_bind, m.particle_bones, m.particle_weights, s.bones, naive);
+      ASSERT_EQ(naive.cols(), s.tracked_positions.cols());
+      for (int q = 0; q < m.particle_count(); ++q) {
+        const Vec3 a = s.tracked_positions.col(q), b = render.col(m.particle_vertex[q]);
+        ASSERT_EQ(std::memcmp(a.data(), b.data(), sizeof(double) * 3), 0) << "trial " << trial << " particle " << q;
+      }
+      EXPECT_LE((naive - s.tracked_positions).cwiseAbs().maxCoeff(), 1e-15) << "trial " << trial;
+    }
+  }
+}
+
+// The multi-threaded render skinning splits the groups between threads; each vertex is still computed by the
+// same code, so every thread count gives the same bits as one thread.
+TEST(HandSkinning, ThreadedRenderSkinningIsBitIdenticalToOneThread) {
+  const HandModel& m = right_model();
+  HandPoseParams p;
+  p.curl = {0.2, 0.4, 0.6, 0.8, 0.9};
+  HandState s;
+  pose_hand(m, make_hand_frame(Handedness::Right, some_pose(), p), s);
+  Eigen::Matrix3Xd one;
+  skin_groups(m, s.bones, one, 1);
+  for (int threads : {2, 3, 7, 64}) {
+    Eigen::Matrix3Xd many = Eigen::Matrix3Xd::Constant(3, 5, 42.0);  // wrong size on purpose: resized
+    skin_groups(m, s.bones, many, threads);
+    ASSERT_EQ(many.cols(), one.cols());
+    EXPECT_EQ(std::memcmp(many.data(), one.data(), sizeof(double) * one.size()), 0) << threads << " threads";
+  }
+}
+
+// The coarse box from the bones alone holds every particle sphere, for any pose (it decides whether a hand
+// skips skinning its particles, so it must never be too small).
+TEST(HandSkinning, CoarseBoundsHoldEveryParticle) {
+  const HandModel& m = right_model();
+  const HandReach reach = build_hand_reach(m);
+  for (int trial = 0; trial < 8; ++trial) {
+    HandPoseParams p;
+    p.curl = {0.12 * trial, 0.13 * trial, 0.1 * trial, 0.11 * trial, 0.125 * trial};
+    p.thumb_opposition = 0.12 * trial;
+    p.spread = 0.5 - 0.15 * trial;
+    HandFrame f = make_hand_frame(Handedness::Right, some_pose(), p);
+    if (trial % 3 == 0) f.joints[kMiddleIntermediate].valid = false;
+    HandState s;
+    pose_hand(m, f, s);
+    Vec3 lo, hi;
+    coarse_particle_bounds(reach, s.bones, lo, hi);
+    EXPECT_TRUE((lo.array() <= s.bounds_lo.array()).all()) << "trial " << trial;
+    EXPECT_TRUE((hi.array() >= s.bounds_hi.array()).all()) << "trial " << trial;
+    EXPECT_LT((hi - lo).maxCoeff(), 0.6);  // and still a hand-sized box, or it would cull nothing
+  }
 }
 
 TEST(HandSkinning, UntrackedFrameKeepsTheLastPose) {

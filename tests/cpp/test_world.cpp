@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <stdexcept>
+
 #include <cmath>
 #include <functional>
 
@@ -225,4 +228,86 @@ TEST(World, FlatDropLandsFlatWithoutDrift) {
     EXPECT_LT(tilt, 1e-4) << "mass " << mass;
     EXPECT_LT(p.orientation.angularDistance(Quat::Identity()), 1e-2) << "mass " << mass;
   }
+}
+
+// --- the scene-driven pipeline: lazy particles, the contact prefilter, threaded render skinning ---
+
+namespace {
+
+HandFrame flat_hand_at(const Vec3& palm) { return make_hand_frame(Handedness::Right, Pose{palm, Quat::Identity()}); }
+
+const StageReport& report_of(const World& w, const std::string& name) {
+  for (const StageReport& r : w.stage_reports())
+    if (r.name == name) return r;
+  throw std::runtime_error("no stage " + name);
+}
+
+}  // namespace
+
+TEST(LeanPipeline, FarHandSkipsParticleSkinningAndReadsStayExact) {
+  World w(WorldDef{});
+  BodyDef box;
+  box.shape = ShapeDef::box(Vec3(0.05, 0.05, 0.05));
+  box.pose.position = Vec3(0, 0.05, 0);
+  w.add_body(box);
+  const HandId hand = w.add_hand(HandDef{});
+  const HandFrame far = flat_hand_at(Vec3(2, 1.5, 2));
+  w.step(1.0 / 60, {far});
+  EXPECT_NE(report_of(w, "skinning").why.find("1 far"), std::string::npos) << report_of(w, "skinning").why;
+  EXPECT_FALSE(report_of(w, "contacts").ran);
+  // Reading the particles skins them now, with the step's arithmetic: the same bits as pose_hand.
+  HandState s;
+  pose_hand(w.hand_model(hand), far, s);
+  const Eigen::Matrix3Xd tracked = w.hand_particles(hand, false), deformed = w.hand_particles(hand, true);
+  ASSERT_EQ(tracked.cols(), s.tracked_positions.cols());
+  EXPECT_EQ(std::memcmp(tracked.data(), s.tracked_positions.data(), sizeof(double) * tracked.size()), 0);
+  EXPECT_EQ(std::memcmp(deformed.data(), s.tracked_positions.data(), sizeof(double) * tracked.size()), 0);
+}
+
+TEST(LeanPipeline, ContactPrefilterFindsEveryContact) {
+  // A hand pressed into a static box: the deformation the world computes from its prefiltered contacts must
+  // equal the one from collide_particles over every particle.
+  World w(WorldDef{});
+  BodyDef box;
+  box.shape = ShapeDef::box(Vec3(0.2, 0.1, 0.2));
+  box.mass = 0;
+  box.pose.position = Vec3(0, -0.1, -0.05);
+  const BodyId body = w.add_body(box);
+  const HandId hand = w.add_hand(HandDef{});
+  w.step(1.0 / 60, {flat_hand_at(Vec3(0, 0.3, 0))});
+  const double lowest = w.hand_particles(hand, false).row(1).minCoeff() - 0.3;
+  const HandFrame press = flat_hand_at(Vec3(0, -lowest - 0.01, 0));
+  w.step(1.0 / 60, {press});
+  const HandModel& m = w.hand_model(hand);
+  HandState s;
+  pose_hand(m, press, s);
+  std::vector<ParticleContact> all;
+  collide_particles(s.tracked_positions, m.particle_radius, box.shape, box.pose, all);
+  ASSERT_GT(all.size(), 10u);
+  EXPECT_EQ(w.body_contact_count(body, hand), int(all.size()));
+  deform_particles(m, s, all);
+  const Eigen::Matrix3Xd deformed = w.hand_particles(hand, true);
+  EXPECT_EQ(std::memcmp(deformed.data(), s.deformed_positions.data(), sizeof(double) * deformed.size()), 0);
+}
+
+TEST(LeanPipeline, ThreadedRenderSkinningIsBitIdentical) {
+  Eigen::Matrix3Xd out[2];
+  for (int threads : {1, 2}) {
+    WorldDef def;
+    def.render_threads = threads;
+    World w(def);
+    BodyDef box;
+    box.shape = ShapeDef::box(Vec3(0.2, 0.1, 0.2));
+    box.mass = 0;
+    box.pose.position = Vec3(0, -0.1, -0.05);
+    w.add_body(box);
+    const HandId hand = w.add_hand(HandDef{});
+    w.step(1.0 / 60, {flat_hand_at(Vec3(0, 0.02, 0))});  // pressing: the render deformation runs too
+    out[threads - 1] = w.hand_render_vertices(hand);
+  }
+  ASSERT_EQ(out[0].cols(), out[1].cols());
+  EXPECT_EQ(std::memcmp(out[0].data(), out[1].data(), sizeof(double) * out[0].size()), 0);
+  WorldDef bad;
+  bad.render_threads = 0;
+  EXPECT_THROW(World{bad}, Error);
 }

@@ -107,6 +107,14 @@ struct SkinGroup {
   std::array<int, 4> bones{};   // joint indices of the influences
 };
 
+// Points laid out for grouped skinning: runs of consecutive points that share their influences, with the
+// bind positions and weights as structure of arrays, so the inner loop has no gathers and vectorizes.
+struct SkinLayout {
+  std::vector<SkinGroup> groups;
+  std::array<std::vector<double>, 3> bind_xyz;  // x, y, z of each bind point
+  std::array<std::vector<double>, 4> weight;    // weight of influence slot k of each point's group
+};
+
 // Built once per hand (MuJoCo style: constant model, per-frame state).
 struct HandModel {
   Handedness handedness = Handedness::Right;
@@ -116,10 +124,8 @@ struct HandModel {
   std::vector<int> source_vertex;     // source_vertex[i] = index of model vertex i in the mesh given/generated
   std::vector<uint8_t> exposed;       // 1: vertex is on the skin; 0: buried inside another part (no particles)
 
-  // Render skinning, structure of arrays in mesh order.
-  std::vector<SkinGroup> groups;
-  std::array<std::vector<double>, 3> bind_xyz;   // x, y, z of each bind vertex
-  std::array<std::vector<double>, 4> group_weight;  // weight of influence slot k of each vertex's group
+  // Render skinning in mesh order: groups by sorted bone set (weights merged and renormalized).
+  SkinLayout skin;
 
   // Particles: spheres at selected mesh vertices.
   std::vector<int> particle_vertex;   // mesh vertex of each particle (sorted)
@@ -128,6 +134,9 @@ struct HandModel {
   Eigen::Matrix3Xd particle_bind;     // bind positions of the particles
   Eigen::Matrix<int, 4, Eigen::Dynamic> particle_bones;
   Eigen::Matrix4Xd particle_weights;
+  // Particle skinning in particle order: runs of particles in one render group, each with its vertex's render
+  // weights, so a tracked particle equals its render vertex (before deformation) bit for bit.
+  SkinLayout particle_skin;
 
   // Local deformation of the render mesh: vertex v moves by sum_k w_k (deformed - tracked) of nearby particles.
   // Stored per particle (CSR) so a frame with few displaced particles touches few vertices.

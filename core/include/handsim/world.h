@@ -37,6 +37,10 @@ struct WorldDef {
   // it or not (no bounds culling of hand-body pairs, render mesh skinned every step, hard joints solved with
   // Ceres LM when built with Ceres). Combine with ParticleContacts::BulletObjects for the full paper mode.
   bool paper_pipeline = false;
+  // Threads that skin the render mesh when it is read (1..64). Every vertex is computed by the same code
+  // whichever thread runs it, so the vertices are bit-identical to one thread. A build without threads
+  // (HANDSIM_WITH_THREADS=OFF) accepts the setting and uses one.
+  int render_threads = 1;
 };
 
 struct BodyDef {

@@ -11,6 +11,7 @@ import sys
 BENCHMARKS = {
     "hand": "handsim.bench.hand",
     "joints": "handsim.bench.joints",
+    "particles": "handsim.bench.particles",
     "step": "handsim.bench.step",
     "world": "handsim.bench.world",
 }
