@@ -287,6 +287,16 @@ void bind_scenes(py::module_& m) {
       py::arg("world"), py::arg("definition") = py::none(),
       "Adds the table (optional), the base, the lid and the hinge; the world is unchanged on bad input.");
   m.def("lid_pinch_shape", &lid_pinch_shape, "The HandPoseParams lid_pinch_palm is made for (bind_hand binds it).");
+  m.attr("SCENARIO_FRAMES") = kScenarioFrames;
+  m.def(
+      "scenario_frames",
+      [](const JewelryBox& box, const World& world, int frame) {
+        if (frame < 0) validate::fail("frame", "must be >= 0, got " + std::to_string(frame));
+        return scenario_frames(box, world, frame);
+      },
+      py::arg("box"), py::arg("world"), py::arg("frame"),
+      "[right, left] HandFrames of frame `frame` (60 Hz) of the scripted two-hand jewelry-box scenario that the "
+      "determinism tests replay (scenes.h); the world has the box and a right then a left hand, HandDef defaults.");
 }
 
 // --- handsim._core.solvers -----------------------------------------------------------------------------

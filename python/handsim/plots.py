@@ -95,3 +95,22 @@ def traces(results, path: str):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def soak(csv_path: str, path: str):
+    """The soak run's per-window maxima (tests/cpp/test_soak.cpp, HANDSIM_SOAK_CSV) against the frame number.
+    Columns that are 0 in every window (a log axis cannot show them) are drawn at 1e-300."""
+    plt = _plt()
+    data = np.genfromtxt(csv_path, delimiter=",", names=True)
+    frame = data["last"] + 1
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.4))
+    for ax, (col, scale, title) in zip(axes, [("grasp_error_m", 1.0, "grasp error, max per window (m)"),
+                                              ("grasp_error_rad", 1.0, "grasp error, max per window (rad)"),
+                                              ("violation_m", 1.0, "hinge violation, max per window (m)")]):
+        ax.semilogy(frame, np.maximum(data[col] * scale, 1e-300), "o-", ms=3)  # log: maxima span 1e-16 .. 1e-4
+        ax.set_title(title, fontsize=10)
+        ax.set_xlabel("frame (end of window)")
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

@@ -2,6 +2,7 @@
 // happen; all of them also check that every state stays finite, the hinge holds (violation <= 1e-9 x scene
 // size) and its limits are respected.
 #include "handsim/scenes.h"
+#include "pose_fit.h"
 
 #include <gtest/gtest.h>
 
@@ -48,6 +49,7 @@ struct Scene {
       ASSERT_TRUE(world.body_linear_velocity(b).allFinite());
       ASSERT_TRUE(world.body_angular_velocity(b).allFinite());
     }
+    if (!world.contains(box.hinge)) return;  // a case that removed it
     const JointState s = world.joint_state(box.hinge);
     ASSERT_TRUE(std::isfinite(s.value));
     ASSERT_GE(s.value, box.def.lower);
@@ -56,6 +58,24 @@ struct Scene {
     max_violation = std::max(max_violation, s.violation);
   }
 };
+
+// A call that must be rejected: handsim::Error with this status, its argument starting with `argument`, and the
+// world exactly as before (state hash, bodies, joints).
+void expect_rejected(const World& world, const std::function<void()>& call, Status status,
+                     const std::string& argument) {
+  const uint64_t hash = world.state_hash();
+  const size_t bodies = world.bodies().size(), joints = world.joints().size();
+  try {
+    call();
+    ADD_FAILURE() << "accepted: " << argument;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), status) << e.what();
+    EXPECT_EQ(e.argument().rfind(argument, 0), 0u) << e.what();
+  }
+  EXPECT_EQ(world.state_hash(), hash) << argument;
+  EXPECT_EQ(world.bodies().size(), bodies) << argument;
+  EXPECT_EQ(world.joints().size(), joints) << argument;
+}
 
 }  // namespace
 
@@ -268,4 +288,303 @@ TEST(stiff, TenThousandParticles) {
     ASSERT_LE(world.joint_state(box.hinge).violation, 1e-9);
   }
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
+}
+
+TEST(stiff, ZeroAndNegativeMassAndSize) {
+  Scene s;
+  for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
+  struct Case {
+    const char* name;
+    std::function<void(JewelryBoxDef&)> edit;
+    const char* argument;
+  };
+  const std::vector<Case> boxes = {
+      {"lid mass 0", [](JewelryBoxDef& d) { d.lid_mass = 0; }, "jewelry_box.lid_mass"},
+      {"lid mass < 0", [](JewelryBoxDef& d) { d.lid_mass = -0.15; }, "jewelry_box.lid_mass"},
+      {"base mass < 0", [](JewelryBoxDef& d) { d.base_mass = -0.5; }, "jewelry_box.base_mass"},
+      {"base size 0", [](JewelryBoxDef& d) { d.base_half_extents.y() = 0; }, "jewelry_box.base_half_extents"},
+      {"base size < 0", [](JewelryBoxDef& d) { d.base_half_extents.x() = -0.09; }, "jewelry_box.base_half_extents"},
+      {"lid thickness 0", [](JewelryBoxDef& d) { d.lid_half_thickness = 0; }, "jewelry_box.lid_half_thickness"},
+      {"lid thickness < 0", [](JewelryBoxDef& d) { d.lid_half_thickness = -0.0075; }, "jewelry_box.lid_half_thickness"},
+  };
+  for (const Case& c : boxes) {
+    SCOPED_TRACE(c.name);
+    JewelryBoxDef d;
+    c.edit(d);
+    expect_rejected(s.world, [&] { build_jewelry_box(s.world, d); }, Status::InvalidArgument, c.argument);
+  }
+  // The same on a single body: a negative mass, a zero or negative box or sphere.
+  auto body = [](double mass, const ShapeDef& shape) {
+    BodyDef d;
+    d.mass = mass;
+    d.shape = shape;
+    d.pose.position = Vec3(0, 1.5, 0);
+    return d;
+  };
+  const Vec3 cube(0.05, 0.05, 0.05);
+  expect_rejected(s.world, [&] { s.world.add_body(body(-1, ShapeDef::box(cube))); }, Status::InvalidArgument, "body.mass");
+  expect_rejected(s.world, [&] { s.world.add_body(body(1, ShapeDef::box(Vec3(0.05, 0, 0.05)))); },
+                  Status::InvalidArgument, "body.shape.half_extents");
+  expect_rejected(s.world, [&] { s.world.add_body(body(1, ShapeDef::box(-cube))); }, Status::InvalidArgument,
+                  "body.shape.half_extents");
+  expect_rejected(s.world, [&] { s.world.add_body(body(1, ShapeDef::sphere(0))); }, Status::InvalidArgument,
+                  "body.shape.radius");
+  expect_rejected(s.world, [&] { s.world.add_body(body(1, ShapeDef::sphere(-0.05))); }, Status::InvalidArgument,
+                  "body.shape.radius");
+  // Mass 0 is legal and means static: a zero-mass base is fixed to the table, and the hand still opens the lid.
+  JewelryBoxDef fixed;
+  fixed.base_mass = 0;
+  Scene f(fixed);
+  EXPECT_EQ(f.world.body_motion(f.box.base), BodyMotion::Static);
+  const Pose base = f.world.body_pose(f.box.base);
+  for (int i = 0; i < 80; ++i) f.step(kDt, {f.pinch(45 * kDeg * std::clamp((i - 20) / 40.0, 0.0, 1.0))});
+  EXPECT_NEAR(f.world.joint_state(f.box.hinge).value, 45 * kDeg, 3 * kDeg);
+  EXPECT_EQ(f.world.body_pose(f.box.base).position, base.position);
+}
+
+TEST(stiff, LowerAboveUpperLimitsAndSpanOver2Pi) {
+  Scene s;
+  for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
+  // A second box's definition, and a hinge between two new free bodies: both rejected before anything is added.
+  JewelryBoxDef inverted;
+  inverted.lower = 1;
+  inverted.upper = 0.5;
+  expect_rejected(s.world, [&] { build_jewelry_box(s.world, inverted); }, Status::InvalidArgument,
+                  "jewelry_box.lower");
+  JewelryBoxDef wide;
+  wide.lower = -M_PI;
+  wide.upper = M_PI + 0.01;
+  expect_rejected(s.world, [&] { build_jewelry_box(s.world, wide); }, Status::InvalidArgument, "jewelry_box.upper");
+  HingeDef h;
+  h.parent = s.box.base;
+  h.child = s.box.lid;  // (already a hard child: checked after the limits)
+  h.axis_parent = h.axis_child = Vec3::UnitX();
+  h.lower = 0.2;
+  h.upper = -0.2;
+  expect_rejected(s.world, [&] { s.world.add_joint(h); }, Status::InvalidArgument, "hinge.lower");
+  h.lower = 0;
+  h.upper = 2 * M_PI + 1e-6;
+  expect_rejected(s.world, [&] { s.world.add_joint(h); }, Status::InvalidArgument, "hinge.upper");
+  SliderDef sl;
+  sl.parent = s.box.base;
+  sl.child = s.box.lid;
+  sl.lower = 0.1;
+  sl.upper = 0.0;
+  expect_rejected(s.world, [&] { s.world.add_joint(sl); }, Status::InvalidArgument, "slider.lower");
+  // The boundaries are legal: lower == upper locks the lid (a hand cannot open it), a span of exactly 2 pi is
+  // one full turn and the hand drags the lid all the way over (to 180 deg).
+  JewelryBoxDef locked;
+  locked.lower = locked.upper = 0;
+  Scene l(locked);
+  for (int i = 0; i < 60; ++i) l.step(kDt, {l.pinch(60 * kDeg * std::clamp((i - 15) / 40.0, 0.0, 1.0))});
+  EXPECT_EQ(l.world.joint_state(l.box.hinge).value, 0.0);
+  JewelryBoxDef turn;
+  turn.lower = -M_PI;
+  turn.upper = M_PI;
+  Scene t(turn);
+  for (int i = 0; i < 120; ++i) {
+    t.step(kDt, {t.pinch(170 * kDeg * std::clamp((i - 15) / 90.0, 0.0, 1.0))});
+    ASSERT_LE(t.world.joint_state(t.box.hinge).violation, 1e-9);
+  }
+  EXPECT_GT(t.world.joint_state(t.box.hinge).value, 150 * kDeg);
+}
+
+TEST(stiff, StaleAndForeignIds) {
+  Scene s;
+  BodyDef cube;
+  cube.shape = ShapeDef::box(Vec3(0.03, 0.03, 0.03));
+  cube.pose.position = Vec3(0.3, 1.0, -0.35);
+  const BodyId removed = s.world.add_body(cube);
+  s.world.remove_body(removed);
+  HandDef left;
+  left.handedness = Handedness::Left;
+  const HandId gone_hand = s.world.add_hand(left);
+  s.world.remove_hand(gone_hand);
+  for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});
+  // The same slot taken again: the old id still names the removed body (generation check), not the new one.
+  const BodyId reused = s.world.add_body(cube);
+  ASSERT_EQ(reused.index, removed.index);
+  // Ids from another world: a bigger one, so the indices exist there but not here.
+  World other;
+  JewelryBox other_box = build_jewelry_box(other);
+  for (int i = 0; i < 6; ++i) other.add_body(cube);
+  const BodyId foreign = other.add_body(cube);
+  HingeDef hd;
+  hd.child = other.add_body(cube);
+  hd.axis_parent = hd.axis_child = Vec3::UnitX();
+  other.add_joint(hd);
+  const JointId foreign_joint = other.add_joint([&] {
+    HingeDef d;
+    d.child = other.add_body(cube);
+    d.axis_parent = d.axis_child = Vec3::UnitX();
+    return d;
+  }());
+  const JointId stale_joint{s.box.hinge.index, s.box.hinge.generation + 1};
+  for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
+  const Status stale = Status::StaleId;
+  expect_rejected(s.world, [&] { s.world.body_pose(removed); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.set_body_pose(removed, Pose{}); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.remove_body(removed); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.set_body_velocity(foreign, Vec3::Zero(), Vec3::Zero()); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.body_grasp(foreign); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.body_pose(BodyId{}); }, stale, "body");
+  expect_rejected(s.world, [&] { s.world.joint_state(foreign_joint); }, stale, "joint");
+  expect_rejected(s.world, [&] { s.world.set_joint_value(stale_joint, 0.5); }, stale, "joint");
+  expect_rejected(s.world, [&] { s.world.remove_joint(foreign_joint); }, stale, "joint");
+  expect_rejected(s.world, [&] { s.world.hand_palm_pose(gone_hand); }, stale, "hand");
+  expect_rejected(s.world, [&] { s.world.remove_hand(gone_hand); }, stale, "hand");
+  expect_rejected(s.world, [&] {
+    HingeDef d;
+    d.parent = foreign;
+    d.child = reused;
+    d.axis_parent = d.axis_child = Vec3::UnitX();
+    s.world.add_joint(d);
+  }, stale, "hinge.parent");
+  EXPECT_FALSE(s.world.contains(removed));
+  EXPECT_FALSE(s.world.contains(foreign));
+  EXPECT_FALSE(s.world.contains(foreign_joint));
+  EXPECT_TRUE(s.world.contains(reused));
+  (void)other_box;
+  // The world goes on as if nothing happened: the hand still holds and opens the lid.
+  for (int i = 0; i < 40; ++i) s.step(kDt, {s.pinch(30 * kDeg * std::min(1.0, i / 30.0))});
+  EXPECT_TRUE(s.world.body_grasp(s.box.lid).grasped);
+  EXPECT_NEAR(s.world.joint_state(s.box.hinge).value, 30 * kDeg, 3 * kDeg);
+}
+
+TEST(stiff, ZeroOneTwoAndCollinearContactsInTheEq2Solve) {
+  // The object-centred pose update (eq. 2) with too few contacts to fix all 6 DOFs gets the minimal-norm
+  // motion: nothing for 0 contacts, a pure translation for 1, centroid translation plus the shortest arc
+  // for 2 or any number on one line (the twist about the line stays 0). Never NaN, also 10 km out.
+  for (const Vec3& origin : {Vec3(0, 0, 0), Vec3(1e4, 0, -1e4)}) {
+    SCOPED_TRACE(origin.transpose());
+    const RigidMotion none = fit_rigid_motion({}, {});
+    EXPECT_EQ(none.constrained_dofs, 0);
+    EXPECT_EQ(none.apply(origin), origin);
+
+    const Vec3 q = origin + Vec3(0.02, 0.75, -0.3), p = q + Vec3(0.001, -0.002, 0.0005);
+    const RigidMotion one = fit_rigid_motion({q}, {p}, {0.002});
+    EXPECT_EQ(one.constrained_dofs, 3);
+    EXPECT_EQ(one.R, Mat3::Identity());
+    EXPECT_LE((one.apply(q) - p).norm(), 1e-12);
+
+    // Two contacts 4 cm apart, the pair turned 10 deg about z and moved 1 mm.
+    const Mat3 turn = Eigen::AngleAxisd(10 * kDeg, Vec3::UnitZ()).toRotationMatrix();
+    const Vec3 c = origin + Vec3(0, 0.8, -0.35), d(0.02, 0, 0), move(0, 0.001, 0);
+    const RigidMotion two = fit_rigid_motion({c - d, c + d}, {c + move - turn * d, c + move + turn * d});
+    EXPECT_EQ(two.constrained_dofs, 5);
+    EXPECT_LE((two.apply(c - d) - (c + move - turn * d)).norm(), 1e-9);
+    EXPECT_LE((two.apply(c + d) - (c + move + turn * d)).norm(), 1e-9);
+    // Shortest arc: no twist about the segment (a point off the line turns with the segment only).
+    EXPECT_LE(std::abs(rotation_vector(two.R).dot(d.normalized())), 1e-9);
+
+    // Ten collinear contacts, unequal weights: the same as two.
+    std::vector<Vec3> from, to;
+    std::vector<double> w;
+    for (int i = 0; i < 10; ++i) {
+      const Vec3 r = d * (-1 + 2 * i / 9.0);
+      from.push_back(c + r);
+      to.push_back(c + move + turn * r);
+      w.push_back(0.1 + 0.1 * i);
+    }
+    const RigidMotion line = fit_rigid_motion(from, to, w);
+    EXPECT_EQ(line.constrained_dofs, 5);
+    EXPECT_TRUE(line.R.allFinite() && line.t.allFinite());
+    for (size_t i = 0; i < from.size(); ++i) EXPECT_LE((line.apply(from[i]) - to[i]).norm(), 1e-9);
+    EXPECT_LE(std::abs(rotation_vector(line.R).dot(d.normalized())), 1e-9);
+  }
+}
+
+// Both hands pinch the lid's front lip 5 cm either side of its middle; then they pull apart along the lip.
+// Eq. 5: the first hand to grasp is primary and moves the object, the second is secondary and re-takes its
+// relative pose every frame, so it slides instead of fighting. Pulling apart therefore moves the object with
+// the primary hand only, the secondary slides off, and its grasp ends (Released). On the hinged lid the
+// primary's pull along the hinge axis is not a rotation: the lid keeps its angle, both hands slide off the
+// lid's sides, and the lid, let go, falls shut.
+namespace {
+
+struct TwoHands {
+  Scene s;
+  HandId left;
+  explicit TwoHands(bool hinged) {
+    HandDef l;
+    l.handedness = Handedness::Left;
+    left = s.world.add_hand(l);
+    if (!hinged) s.world.remove_joint(s.box.hinge);
+  }
+  // The hands' palms: the lid pinch at `angle`, lifted by `lift`, each moved `apart` outwards along the lip.
+  std::vector<HandFrame> frames(double angle, double lift, double apart, bool with_left = true) const {
+    const Vec3 side = s.world.body_pose(s.box.base).orientation * Vec3::UnitX();
+    std::vector<HandFrame> f;
+    for (Handedness h : {Handedness::Right, Handedness::Left}) {
+      if (h == Handedness::Left && !with_left) break;
+      const double sign = h == Handedness::Right ? 1.0 : -1.0;
+      Pose palm = s.box.lid_pinch_palm(s.world, h, angle, lift);
+      palm.position += sign * (0.05 + apart) * side;
+      f.push_back(make_hand_frame(h, palm, lid_pinch_shape()));
+    }
+    return f;
+  }
+};
+
+}  // namespace
+
+TEST(stiff, TwoHandsPullAGraspedObjectApart) {
+  for (bool hinged : {true, false}) {
+    SCOPED_TRACE(hinged ? "hinged lid" : "free lid");
+    TwoHands t(hinged);
+    Scene& s = t.s;
+    const HandId right = s.hand;
+    // The right hand grasps first, the left joins 15 frames later.
+    for (int i = 0; i < 15; ++i) s.step(kDt, t.frames(0, 0, 0, false));
+    for (int i = 0; i < 15; ++i) s.step(kDt, t.frames(0, 0, 0));
+    GraspInfo g = s.world.body_grasp(s.box.lid);
+    ASSERT_TRUE(g.grasped);
+    EXPECT_EQ(g.primary, right);
+    EXPECT_EQ(g.secondary, t.left);
+    // Together they lift the lid: open to 30 deg (hinged) or 30 deg about the same edge, 5 cm up (free).
+    const double lift = hinged ? 0.0 : 0.05;
+    for (int i = 1; i <= 40; ++i) s.step(kDt, t.frames(30 * kDeg * i / 40.0, lift * i / 40.0, 0));
+    g = s.world.body_grasp(s.box.lid);
+    ASSERT_TRUE(g.grasped);
+    EXPECT_EQ(g.primary, right);
+    EXPECT_EQ(g.secondary, t.left);
+    const double held = hinged ? s.world.joint_state(s.box.hinge).value : 0.0;
+    if (hinged) {
+      EXPECT_NEAR(held, 30 * kDeg, 1 * kDeg);
+    }
+    const Pose relative = g.primary_relative;
+    // Pull apart: each hand 30 cm outwards along the lip in 30 frames (0.6 m/s), then they stay there.
+    int left_released = -1, right_released = -1;
+    for (int i = 1; i <= 60; ++i) {
+      s.step(kDt, t.frames(30 * kDeg, lift, 0.3 * std::min(1.0, i / 30.0)));
+      for (const Event& e : s.world.events()) {
+        if (e.type != EventType::GraspEnd || e.body != s.box.lid) continue;
+        EXPECT_EQ(e.reason, EventReason::Released);
+        (e.hand == right ? right_released : left_released) = i;
+      }
+      const GraspInfo now = s.world.body_grasp(s.box.lid);
+      if (!now.grasped) continue;
+      EXPECT_EQ(now.primary, right) << i;  // the secondary never takes over while the primary holds
+      if (hinged) {
+        // A pull along the hinge axis is no rotation about it: the lid keeps its angle while held.
+        EXPECT_NEAR(s.world.joint_state(s.box.hinge).value, held, 2 * kDeg) << i;
+      } else {
+        // Eq. 5: the free lid follows the primary hand exactly, with the relative pose of its grasp.
+        const Pose expected = s.world.hand_palm_pose(right) * relative;
+        EXPECT_LE((s.world.body_pose(s.box.lid).position - expected.position).norm(), 1e-9) << i;
+        EXPECT_LE(s.world.body_pose(s.box.lid).orientation.angularDistance(expected.orientation), 1e-9) << i;
+      }
+    }
+    EXPECT_GT(left_released, 0);  // the secondary slid off the lid and let go
+    if (hinged) {
+      // Both hands slide off the sides of the lid (it cannot follow either); let go, it falls shut.
+      EXPECT_GT(right_released, 0);
+      EXPECT_FALSE(s.world.body_grasp(s.box.lid).grasped);
+      EXPECT_EQ(s.world.joint_state(s.box.hinge).value, 0.0);
+    } else {
+      // The primary keeps the free lid all the way: it has moved 30 cm with the right hand.
+      EXPECT_EQ(right_released, -1);
+      EXPECT_TRUE(s.world.body_grasp(s.box.lid).grasped);
+    }
+  }
 }

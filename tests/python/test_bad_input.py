@@ -1,4 +1,6 @@
-"""bad_input matrix: every World method that takes arguments, called with bad ones.
+"""bad_input matrix: every World method and module function that takes arguments, called with bad ones.
+
+(World.contains answers False for anything that is not a live id of this world; it raises nothing.)
 
 Each row: the call, the exception type it must raise, and a word its message must contain (the argument's
 name). After every row the world's state hash is unchanged.
@@ -45,6 +47,7 @@ def rows(world, box, hand, frame, foreign):
     box_def = lambda **kw: handsim.BodyDef(shape=handsim.Shape.box([0.1] * 3), **kw)  # noqa: E731
     err = handsim.InvalidArgumentError
     stale = handsim.StaleIdError
+    foreign_hand = handsim.HandId.unpack(12345 << 32)
     state = handsim.InvalidStateError
     return [
         ("step dt=0", lambda: world.step(0.0), err, "dt"),
@@ -86,6 +89,29 @@ def rows(world, box, hand, frame, foreign):
         ("hand_particles foreign", lambda: world.hand_particles(handsim.HandId.unpack(12345 << 32)), stale, "hand"),
         ("body_contact_count foreign", lambda: world.body_contact_count(foreign, hand), stale, "body"),
         ("joint_state stale", lambda: world.joint_state(handsim.JointId.unpack((77 << 32) | 5)), stale, "joint"),
+        ("scenario_frames frame<0", lambda: handsim.scenario_frames(box, world, -1), err, "frame"),
+        ("body_grasp foreign", lambda: world.body_grasp(foreign), stale, "body"),
+        ("body_mass foreign", lambda: world.body_mass(foreign), stale, "body"),
+        ("body_motion foreign", lambda: world.body_motion(foreign), stale, "body"),
+        ("body_shape foreign", lambda: world.body_shape(foreign), stale, "body"),
+        ("body_velocity foreign", lambda: world.body_velocity(foreign), stale, "body"),
+        ("hand_model foreign", lambda: world.hand_model(foreign_hand), stale, "hand"),
+        ("hand_palm_pose foreign", lambda: world.hand_palm_pose(foreign_hand), stale, "hand"),
+        ("hand_render_vertices foreign", lambda: world.hand_render_vertices(foreign_hand), stale, "hand"),
+        ("hand_tracked foreign", lambda: world.hand_tracked(foreign_hand), stale, "hand"),
+        ("remove_hand foreign", lambda: world.remove_hand(foreign_hand), stale, "hand"),
+        ("remove_joint stale", lambda: world.remove_joint(handsim.JointId.unpack((77 << 32) | 5)), stale, "joint"),
+        ("bind_frame scale<0", lambda: handsim.bind_frame(handsim.Handedness.RIGHT, scale=-1.0), err, "scale"),
+        ("bind_frame handedness", lambda: handsim.bind_frame("up"), TypeError, "handedness"),
+        ("collide_particles radius<0",
+         lambda: handsim.collide_particles([[0, 0, 0]], -0.01, handsim.Shape.sphere(0.1), [0, 0, 0, 0, 0, 0, 1]), err,
+         "radius"),
+        ("hinge_from_world zero axis",
+         lambda: handsim.hinge_from_world(box.base, world.body_pose(box.base), box.lid, world.body_pose(box.lid),
+                                          [0, 0, 0], [0, 0, 0]), err, "axis_world"),
+        ("make_hand_mesh too few vertices",
+         lambda: handsim.make_hand_mesh(handsim.bind_frame(handsim.Handedness.RIGHT), target_vertices=-5), err,
+         "target_vertices"),
     ]
 
 
@@ -102,4 +128,4 @@ def test_bad_input_matrix(scene):
             pytest.fail(f"{name}: did not raise {exc.__name__}")
         assert world.state_hash() == before, f"{name}: the world changed"
         covered += 1
-    assert covered >= 30
+    assert covered >= 49
