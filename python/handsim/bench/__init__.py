@@ -1,5 +1,6 @@
 """Benchmarks; run them with ``python -m handsim.bench NAME``. Timing helpers shared by all of them."""
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -24,3 +25,12 @@ def format_table(headers, rows):
     widths = [max(len(str(h)), *(len(str(r[i])) for r in rows)) for i, h in enumerate(headers)]
     line = lambda cells: "  ".join(str(c).rjust(w) for c, w in zip(cells, widths))
     return "\n".join([line(headers), line(["-" * w for w in widths])] + [line(r) for r in rows])
+
+
+def write_doc(root: Path, doc: str, image: str, plot, text: str, result):
+    """Writes docs/img/<image> with plot(result, path) and docs/<doc> with `text`: the two files every
+    benchmark report regenerates together."""
+    img = Path(root) / "docs" / "img" / image
+    img.parent.mkdir(parents=True, exist_ok=True)
+    plot(result, img)
+    (Path(root) / "docs" / doc).write_text(text)

@@ -32,7 +32,7 @@ import numpy as np
 
 import handsim
 
-from . import format_table
+from . import format_table, write_doc
 from . import step as step_bench
 
 DT = 1 / 60
@@ -263,10 +263,7 @@ def plot(result, path):
 
 
 def write_report(result, root=ROOT):
-    img = root / "docs" / "img" / "particle_tradeoff.png"
-    img.parent.mkdir(parents=True, exist_ok=True)
-    plot(result, img)
-    (root / "docs" / "performance_particles.md").write_text(report(result))
+    write_doc(root, "performance_particles.md", "particle_tradeoff.png", plot, report(result), result)
 
 
 def report(result):

@@ -26,7 +26,7 @@ import numpy as np
 
 import handsim
 
-from . import format_table
+from . import format_table, write_doc
 
 DT = 1 / 60
 PIPELINES = ("lean", "paper")
@@ -306,10 +306,7 @@ def _verdict(value, target):
 
 
 def write_report(result, root=ROOT):
-    img = root / "docs" / "img" / "step_scaling.png"
-    img.parent.mkdir(parents=True, exist_ok=True)
-    plot(result, img)
-    (root / "docs" / "performance.md").write_text(report(result))
+    write_doc(root, "performance.md", "step_scaling.png", plot, report(result), result)
 
 
 def report(result):
