@@ -14,6 +14,7 @@ import numpy as np
 
 import handsim
 from handsim import experiments, render, users
+from handsim.plots import save_figure
 
 
 def draw(ax, snap, title):
@@ -79,10 +80,8 @@ def main(out_dir="out/demo"):
     for ax, snap in zip(axes.flat, keys):
         draw(ax, snap, f"{snap['task']}  t={snap['t']:.2f} s  lid {snap['angle']:.0f}°")
     fig.suptitle("handsim: two hands open and close the jewelry box (side view; blue right, red left)")
-    fig.tight_layout()
     strip = os.path.join(out_dir, "filmstrip.png")
-    fig.savefig(strip, dpi=90)
-    plt.close(fig)
+    save_figure(fig, strip, dpi=90)
 
     # GIF
     images = []
@@ -104,10 +103,8 @@ def main(out_dir="out/demo"):
     a2.semilogy(record["t"], np.maximum(record["violation"], 1e-17))
     a2.set_ylabel("hinge violation (m)")
     a2.set_xlabel("time (s)")
-    fig.tight_layout()
     plot = os.path.join(out_dir, "lid_angle.png")
-    fig.savefig(plot, dpi=100)
-    plt.close(fig)
+    save_figure(fig, plot, dpi=100)
 
     ok = all(r[1] for r in results)
     lines = [f"handsim {handsim.__version__}: jewelry box, two hands, open then close (simulated user, exact method)"]

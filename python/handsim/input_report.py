@@ -18,6 +18,7 @@ import numpy as np
 
 from . import render as _render
 from . import replay as _replay
+from .plots import save_figure
 from .adapters.leap import load_leap_recording
 
 BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
@@ -87,10 +88,7 @@ def _figure(path: Path, name: str, motion, runs):
     ax.set_xlabel("time (s)")
     ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"{name}: blue right hand, red left; key frames at 0, 1/3, 2/3 and the end", fontsize=10)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=72)
-    plt.close(fig)
+    save_figure(fig, path, dpi=72)
 
 
 def run_all(assets: Path, img: Path = None) -> List[dict]:

@@ -14,6 +14,15 @@ def _plt():
     return plt
 
 
+def save_figure(fig, path, dpi: int = 110):
+    """Lays out, writes (creating the folder) and closes a figure: every PNG of the project ends here."""
+    from pathlib import Path
+    fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    _plt().close(fig)
+
+
 def kde(samples, grid, bandwidth=None):
     """Gaussian kernel density of `samples` on `grid` (Scott's rule bandwidth), as in the paper's Fig. 9."""
     x = np.asarray(samples, float)
@@ -50,9 +59,7 @@ def success_rates(rows: List[dict], path: str):
     ax.set_ylim(0, 100)
     ax.legend(fontsize=7, ncol=4, loc="upper center", bbox_to_anchor=(0.5, -0.1))
     ax.set_title("Jewelry box: success of simulated users")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def time_kde(results, path: str):
@@ -72,9 +79,7 @@ def time_kde(results, path: str):
     ax.set_ylabel("density")
     ax.set_title("Completion time of successful trials (c = -0.7), kernel density")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def traces(results, path: str):
@@ -92,9 +97,7 @@ def traces(results, path: str):
     a1.set_title("Open, two hands, user 0 under every condition")
     a2.set_ylabel("hinge violation (m)")
     a2.set_xlabel("time (s)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def soak(csv_path: str, path: str):
@@ -111,6 +114,4 @@ def soak(csv_path: str, path: str):
         ax.set_title(title, fontsize=10)
         ax.set_xlabel("frame (end of window)")
         ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

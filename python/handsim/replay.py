@@ -40,6 +40,7 @@ from . import _core
 from . import recording as _rec
 from . import render as _render
 from . import scenes as _scenes
+from .plots import save_figure
 from .adapters import skeleton as _sk
 
 DT = 1.0 / 60.0
@@ -402,10 +403,7 @@ def _picture(path: Path, rec, summary: Summary, snaps, trace, motion: Optional[M
     ax.legend(fontsize=7, loc="upper left")
     fig.suptitle(f"{summary.name} on {rec.scene} ({view}; blue right hand, red left): grasps {summary.grasps or 'none'}",
                  fontsize=10)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path, dpi=80)
 
 
 def load_motion(path: Path) -> Motion:

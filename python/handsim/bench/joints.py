@@ -20,6 +20,7 @@ import handsim
 from handsim._core import solvers
 
 from . import format_table
+from ..plots import save_figure
 
 SEED = 20240607
 WRONG_RAD = 0.01  # an answer this far from the reference is a wrong answer
@@ -494,10 +495,7 @@ def plot(result, path):
     handles += [Line2D([], [], color="gray", marker=m, linestyle="", label=c) for c, m in markers.items()]
     ax.legend(handles=handles, fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(True, which="major", linewidth=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def plot_groups(result, path):
@@ -530,10 +528,7 @@ def plot_groups(result, path):
     axes[0].set_title("Jewelry box: lid dragged past its 90 deg limit by a pinching hand")
     for ax in axes:
         ax.grid(True, linewidth=0.3)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 COMMAND = ".venv/bin/python -m handsim.bench joints"

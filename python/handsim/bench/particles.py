@@ -34,6 +34,7 @@ import handsim
 
 from . import format_table, write_doc
 from . import step as step_bench
+from ..plots import save_figure
 
 DT = 1 / 60
 COUNTS = (100, 300, 1182, 3000, 10000)
@@ -257,9 +258,7 @@ def plot(result, path):
     for ax in (a, b):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def write_report(result, root=ROOT):

@@ -27,6 +27,7 @@ import numpy as np
 import handsim
 
 from . import format_table, write_doc
+from ..plots import save_figure
 
 DT = 1 / 60
 PIPELINES = ("lean", "paper")
@@ -287,9 +288,7 @@ def plot(result, path):
     for ax in (a, b):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
 
 
 def _find(result, scene, pipeline, particles=DEFAULT_PARTICLES, render=None):
