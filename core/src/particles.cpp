@@ -21,22 +21,22 @@ std::vector<int> sample_particles(const Eigen::Matrix3Xd& positions, const std::
     }
     chosen.assign(pool.begin(), pool.begin() + count);
   } else {
-    // Farthest-point sampling: O(count * candidates), done once per model.
-    std::vector<double> d2(pool.size(), std::numeric_limits<double>::infinity());
-    size_t next = count > 0 ? size_t(rng() % uint64_t(pool.size())) : 0;
+    // Farthest-point sampling: O(count * candidates), done once per model (every World::add_hand samples
+    // afresh). The candidates' coordinates are copied into contiguous arrays so that the distance update
+    // vectorizes; the first farthest candidate wins a tie, as in a plain scan.
+    const Eigen::Index n = Eigen::Index(pool.size());
+    Eigen::ArrayXd px(n), py(n), pz(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      px[i] = positions(0, pool[i]);
+      py[i] = positions(1, pool[i]);
+      pz[i] = positions(2, pool[i]);
+    }
+    Eigen::ArrayXd d2 = Eigen::ArrayXd::Constant(n, std::numeric_limits<double>::infinity());
+    Eigen::Index next = count > 0 ? Eigen::Index(rng() % uint64_t(n)) : 0;
     for (int c = 0; c < count; ++c) {
       chosen.push_back(pool[next]);
-      const Vec3 p = positions.col(pool[next]);
-      size_t far = 0;
-      double far_d = -1;
-      for (size_t i = 0; i < pool.size(); ++i) {
-        d2[i] = std::min(d2[i], (positions.col(pool[i]) - p).squaredNorm());
-        if (d2[i] > far_d) {
-          far_d = d2[i];
-          far = i;
-        }
-      }
-      next = far;
+      d2 = d2.min((px - px[next]).square() + (py - py[next]).square() + (pz - pz[next]).square());
+      d2.maxCoeff(&next);
     }
   }
   std::sort(chosen.begin(), chosen.end());  // memory order for the per-frame skinning

@@ -228,8 +228,6 @@ def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: S
         params, rule = free_box_params(motion, shift, hand_defs)
     elif scene != "jewelry_box":
         raise ValueError(f"scene: expected 'jewelry_box' or 'free_box' for tracker input, got {scene!r}")
-    if hand_defs is None:
-        hand_defs = [_core.HandDef(handedness=_core.Handedness.RIGHT), _core.HandDef(handedness=_core.Handedness.LEFT)]
     pose = np.array([*shift, 0, 0, 0, 1.0])
     n = int(math.floor(motion.times[-1] / dt + 1e-9)) + 1
     index = np.searchsorted(motion.times, np.arange(n) * dt + 1e-12, side="right") - 1

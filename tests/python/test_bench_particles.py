@@ -53,23 +53,39 @@ def test_default_rule_takes_the_fewest_particles_within_tolerance_then_the_small
     assert particles.choose_default(rows[:1], fit_tol=0.25)["choice"] is None
 
 
-def _result(choice):
+def _result(choice, default=("EVEN", 3000)):
     rows = [_row(s, n, 0.1, 0.0, 1e-5, series) for series in particles.SERIES
-            for s, n in (("RANDOM", 1182), ("all", 34021))]
+            for s, n in (("RANDOM", 1182), ("EVEN", 3000), ("all", 34021))]
     ref = {"particles": 34021, "radius_m": 0.0037, "grasped_frames": 120, "push_mm": 1.0, "depth_sensitivity": 0.2}
     return {"rows": rows, "presses": 6, "pinch_frames": 120, "default_radius_m": 0.0037, "load_average": [1, 1],
-            "wall_s": 1.0, "references": {s: ref for s in particles.SERIES},
+            "wall_s": 1.0, "references": {s: ref for s in particles.SERIES}, "project_default": list(default),
             "default": {"fit_tol": 0.2, "grasp_tol": 0.02, "choice": choice}}
 
 
 def test_report_has_both_series_and_says_whether_the_default_came_from_the_study():
-    chosen = particles.report(_result({"sampling": "RANDOM", "particles": 1182}))
+    chosen = particles.report(_result({"sampling": "EVEN", "particles": 3000}))
     assert "## Fixed radius" in chosen and "## Radius from the spacing" in chosen
     assert "the default is chosen from this study" in chosen
-    other = particles.report(_result({"sampling": "EVEN", "particles": 3000}))
-    assert "pending decision" in other and "3000 particles" in other
-    assert "pending decision" in particles.report(_result(None))
-    assert "chosen (fixed radius): RANDOM 1182" in particles.table(_result({"sampling": "RANDOM", "particles": 1182}))
+    assert "The project default (3000 even)" in chosen and "The paper's (1182 random)" in chosen
+    other = particles.report(_result({"sampling": "RANDOM", "particles": 1182}))
+    assert "fit rule picks **random sampling, 1182 particles**" in other
+    assert "not backed by this run" in particles.report(_result(None))
+    assert particles.table(_result({"sampling": "EVEN", "particles": 3000})).endswith(
+        "chosen (fixed radius): EVEN 3000; project default: EVEN 3000")
+
+
+def test_the_project_default_is_read_from_the_hand_it_builds():
+    sampling, count = particles.project_default()
+    d = handsim.HandDef()
+    assert (sampling, count) == (d.sampling.name, d.particle_count)
+
+
+def test_random_rows_average_their_draws_and_keep_the_spread():
+    draws = [dict(_row("RANDOM", 3000, fit, 0.0, t), seeds=1) for fit, t in ((0.1, 1e-5), (0.3, 3e-5))]
+    row = particles.mean_row(draws)
+    assert row["fit_linear_rel_error"] == 0.2 and row["fit_range"] == [0.1, 0.3] and row["seeds"] == 2
+    assert row["step_median_s"] == 2e-5 and row["particles"] == 3000
+    assert "0.200 (0.100-0.300)" in particles._cells(row, 120)
 
 
 def test_every_press_touches_the_top_face_only():
@@ -87,3 +103,36 @@ def test_every_press_touches_the_top_face_only():
         low = v[v[:, 1] < hy + reach]
         assert len(low) > 0
         assert np.all(np.abs(low[:, 0]) < hx) and np.all(np.abs(low[:, 2]) < hz)
+
+
+def test_behaviour_gate_runs_the_core_checks_on_a_small_hand():
+    b = particles.behaviour(300, handsim.ParticleSampling.RANDOM)
+    assert b["base_push_m"] >= 0 and np.isfinite(b["lid_slam_deg_s"]) and 0 <= b["lid_final_deg"] <= 90.5
+    assert b["core_ok"] == (b["base_push_m"] < particles.GATE_BASE_PUSH_M and
+                            b["lid_slam_deg_s"] < particles.GATE_LID_SLAM_DEG_S and
+                            b["lid_final_deg"] > particles.GATE_LID_FINAL_DEG)
+    assert "leap_missed" not in b  # no recordings asked for
+
+
+def _canned(push_m, missed):
+    return {"base_push_m": push_m, "lid_slam_deg_s": 10.0, "lid_final_deg": 89.0,
+            "core_ok": push_m < particles.GATE_BASE_PUSH_M, "leap_missed": missed}
+
+
+def test_gate_passes_a_candidate_only_if_it_is_no_worse_than_the_default(monkeypatch):
+    canned = {("RANDOM", 1182): _canned(0.007, {"three-claps": ["no grasp"]}),
+              ("EVEN", 3000): _canned(0.036, {"three-claps": ["no grasp"]}),
+              ("RANDOM", 3000): _canned(0.001, {"three-claps": ["no grasp"], "grab": ["cube grasped"]})}
+    monkeypatch.setattr(particles, "project_default", lambda: ("RANDOM", 1182))
+    monkeypatch.setattr(particles, "behaviour", lambda n, s, r, recordings=None: canned[(s.name, n)])
+    rows = particles.gate({"sampling": "EVEN", "particles": 3000}, 0.0037, recordings="folder")
+    assert [(g["sampling"], g["particles"], g["passes"]) for g in rows] == \
+        [("RANDOM", 1182, True), ("EVEN", 3000, False), ("RANDOM", 3000, False)]
+    assert [g["radius_m"] for g in rows][1:] == [0.0037, 0.0037]
+    result = _result({"sampling": "EVEN", "particles": 3000}, default=("RANDOM", 1182))
+    result.update(gate=rows, gate_recordings=True)
+    text = particles.report(result)
+    assert "fails the behaviour gate" in text and "### Behaviour gate" in text
+    assert "grab: cube grasped" in text and "| even 3000 | 3.70 | 36.0 |" in text
+    rows[1]["passes"] = True
+    assert "the default does not follow this run yet" in particles.report(result)

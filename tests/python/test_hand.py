@@ -265,17 +265,20 @@ def test_bending_one_finger_moves_only_its_vertices(hand_world):
 
 
 def test_same_seed_same_particles_different_seed_different():
-    a = handsim.HandModel(handsim.HandDef(seed=7))
-    b = handsim.HandModel(handsim.HandDef(seed=7))
-    c = handsim.HandModel(handsim.HandDef(seed=8))
+    def model(seed):
+        return handsim.HandModel(handsim.HandDef(particle_count=1182, sampling=handsim.ParticleSampling.RANDOM,
+                                                 seed=seed))
+    a, b, c = model(7), model(7), model(8)
     np.testing.assert_array_equal(a.particle_vertex, b.particle_vertex)
     assert len(np.setdiff1d(a.particle_vertex, c.particle_vertex)) > 500
     assert np.all(a.exposed[a.particle_vertex])
 
 
 def test_even_sampling_has_a_smaller_largest_gap():
-    random = [handsim.HandModel(handsim.HandDef(seed=s)).largest_particle_gap() for s in (1, 2)]
-    even = handsim.HandModel(handsim.HandDef(sampling=handsim.ParticleSampling.EVEN))
+    def model(sampling, seed=1):  # radius 0: from the spacing, which the gap is compared with
+        return handsim.HandModel(handsim.HandDef(particle_count=1182, sampling=sampling, seed=seed, particle_radius=0))
+    random = [model(handsim.ParticleSampling.RANDOM, s).largest_particle_gap() for s in (1, 2)]
+    even = model(handsim.ParticleSampling.EVEN)
     assert even.particle_count == 1182
     assert even.largest_particle_gap() < 0.75 * min(random)
     # A hexagonal covering of the skin with 1,182 points leaves gaps of about a particle radius.

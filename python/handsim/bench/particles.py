@@ -4,8 +4,9 @@ The paper kept 1,182 of its mesh's vertices as particles without saying why. For
 samplings (random, even) this measures, against the reference that uses every exposed vertex as a particle, in
 two series:
 
-- "fixed": every count, and the reference, use the particle radius of the default hand (1,182 random, radius
-  from its spacing), so the error is the sampling alone; the default count is chosen from this series.
+- "fixed": every count, and the reference, use the particle radius of the default hand (HandDef's 3.7 mm, the
+  radius the paper's 1,182 random particles get from their spacing), so the error is the sampling alone; the
+  default count is chosen from this series.
 - "spacing": the radius follows each count's own spacing (HandDef.particle_radius = 0), as a hand built with
   that count would have it; the reference then has its own, much smaller radius, so this series mixes the
   sphere size into the error (bigger spheres reach deeper and ask for a bigger push).
@@ -19,6 +20,9 @@ two series:
 - visible penetration: after each press, the deepest render vertex inside the box (the render mesh is what
   the user sees; particles only push back the vertices near them).
 - step time: median world.step of a press held still (lean pipeline, one thread).
+
+Random rows are the mean over SEEDS draws (the spread of the fit error is shown): one draw's error moved by
+more than the gap between neighbouring counts. Even sampling depends on its seed only through the first point.
 
 A full run writes docs/img/particle_tradeoff.png and docs/performance_particles.md (linked from
 docs/performance.md); --quick measures fewer counts and writes nothing.
@@ -39,6 +43,7 @@ from ..plots import save_figure
 DT = 1 / 60
 COUNTS = (100, 300, 1182, 3000, 10000)
 QUICK_COUNTS = (100, 1182)
+SEEDS = (1, 2, 3)
 ALL = 10 ** 6  # clamped by the model to every exposed vertex
 BOX_HALF = (0.06, 0.03, 0.06)
 # The presses: (x, z offset of the contact patch's centre from the box's top centre, depth of the lowest skin
@@ -91,11 +96,11 @@ def press_placement():
     return 1.0 - float(v[:, 1].min()), float(centre[0]), float(centre[2])
 
 
-def press(count, sampling, place, radius=0.0, extra_depth=0.0):
+def press(count, sampling, place, radius=0.0, extra_depth=0.0, seed=1):
     """Pose-fit velocities, visible penetration and step time of one hand of `count` particles (radius 0: from
     the spacing); extra_depth presses every pose that much deeper (the rule's tolerance comes from it)."""
     world = handsim.World(handsim.WorldDef(gravity=[0, 0, 0], ground=False))
-    hand = world.add_hand(handsim.HandDef(particle_count=count, sampling=sampling, particle_radius=radius))
+    hand = world.add_hand(handsim.HandDef(particle_count=count, sampling=sampling, particle_radius=radius, seed=seed))
     box = world.add_body(handsim.BodyDef(shape=handsim.Shape.box(BOX_HALF), mass=0.5, pose=[0, 0, 0, 0, 0, 0, 1]))
     rows, frames = [], []
     drop, cx, cz = place
@@ -121,9 +126,9 @@ def press(count, sampling, place, radius=0.0, extra_depth=0.0):
             "penetration_m": [r[2] for r in rows], "step_median_s": float(np.median(times))}
 
 
-def pinch(count, sampling, radius=0.0):
+def pinch(count, sampling, radius=0.0, seed=1):
     """Per frame: is the lid grasped, along the step benchmark's lid-opening pinch."""
-    world, hands, frame, warmup, lid = _jewelry_with(sampling, count, radius)
+    world, hands, frame, warmup, lid = _jewelry_with(sampling, count, radius, seed)
     out = []
     for i in range(-warmup, PINCH_FRAMES):
         world.step(DT, frame(i))
@@ -132,14 +137,14 @@ def pinch(count, sampling, radius=0.0):
     return np.array(out)
 
 
-def _jewelry_with(sampling, count, radius):
+def _jewelry_with(sampling, count, radius, seed):
     """The step benchmark's jewelry-box scene with hands of another sampling and radius (the scene itself is
     the step benchmark's, so the two stay one scene)."""
     original = step_bench._hand
 
     def hand(world, handedness, particles, render):
         return world.add_hand(handsim.HandDef(handedness=handedness, particle_count=particles, render_vertices=render,
-                                              sampling=sampling, particle_radius=radius))
+                                              sampling=sampling, particle_radius=radius, seed=seed))
     step_bench._hand = hand
     try:
         return step_bench.build("jewelry_box", "lean", particles=count, frames_total=PINCH_FRAMES)
@@ -156,11 +161,15 @@ def run(quick=False, write=None):
         series_rows, refs[series] = measure_series(series, radius if series == "fixed" else 0.0, place, quick)
         rows += series_rows
     result = {"rows": rows, "quick": quick, "presses": len(PRESSES), "pinch_frames": PINCH_FRAMES,
-              "default_radius_m": radius, "references": refs,
+              "default_radius_m": radius, "references": refs, "project_default": list(project_default()),
               "load_average": [load_before, os.getloadavg()[0]], "wall_s": time.perf_counter() - t_start}
     # the sphere size is held fixed only in the "fixed" series, so only it can choose a count
     result["default"] = choose_default([r for r in rows if r["series"] == "fixed"],
                                        fit_tol=refs["fixed"]["depth_sensitivity"])
+    from ..input_report import default_assets
+    recordings = default_assets() if default_assets().is_dir() and not quick else None
+    result["gate"] = gate(result["default"]["choice"], radius, recordings)
+    result["gate_recordings"] = recordings is not None
     if (not quick) if write is None else write:
         write_report(result)
     return result
@@ -172,12 +181,15 @@ def measure_series(series, radius, place, quick):
     ref_press, ref_pinch = press(ALL, samplings[0], place, radius), pinch(ALL, samplings[0], radius)
     rows = []
     for sampling in samplings:
+        seeds = SEEDS if sampling == handsim.ParticleSampling.RANDOM and not quick else SEEDS[:1]
         for n in (QUICK_COUNTS if quick else COUNTS):
-            p, g = press(n, sampling, place, radius), pinch(n, sampling, radius)
-            rows.append(_row(series, sampling.name, p, g, ref_press, ref_pinch))
+            draws = [_row(series, sampling.name, press(n, sampling, place, radius, seed=k),
+                          pinch(n, sampling, radius, seed=k), ref_press, ref_pinch) for k in seeds]
+            rows.append(mean_row(draws))
     rows.append(_row(series, "all", ref_press, ref_pinch, ref_press, ref_pinch))
     deeper = press(ALL, samplings[0], place, radius, extra_depth=DEPTH_STEP)
-    ref = {"depth_sensitivity": _row(series, "all", deeper, ref_pinch, ref_press, ref_pinch)["fit_linear_rel_error"],"particles": ref_press["particles"], "radius_m": ref_press["radius_m"],
+    ref = {"depth_sensitivity": _row(series, "all", deeper, ref_pinch, ref_press, ref_pinch)["fit_linear_rel_error"],
+           "particles": ref_press["particles"], "radius_m": ref_press["radius_m"],
            "grasped_frames": int(ref_pinch.sum()),
            "push_mm": float(np.median([np.linalg.norm(v) for v in ref_press["linear"]]) * DT * 1e3)}
     return rows, ref
@@ -191,8 +203,85 @@ def _row(series, sampling, p, g, ref_p, ref_g):
     return {"series": series, "sampling": sampling, "particles": p["particles"], "radius_m": p["radius_m"],
             "fit_linear_rel_error": float(dv / max(sum(np.linalg.norm(b) for b in ref_p["linear"]), 1e-9)),
             "fit_angular_error_rad_s": float(np.median(ang)),
-            "grasp_disagreement": float(np.mean(g != ref_g)), "grasped_frames": int(g.sum()),
+            "grasp_disagreement": float(np.mean(g != ref_g)), "grasped_frames": int(g.sum()), "seeds": 1,
             "visible_penetration_m": float(max(p["penetration_m"])), "step_median_s": p["step_median_s"]}
+
+
+def mean_row(draws):
+    """One row from several draws of a sampling: the mean of every measure, and the fit error's spread."""
+    row = dict(draws[0])
+    for key in ("radius_m", "fit_linear_rel_error", "fit_angular_error_rad_s", "grasp_disagreement",
+                "visible_penetration_m", "step_median_s"):
+        row[key] = float(np.mean([d[key] for d in draws]))
+    row["grasped_frames"] = int(round(np.mean([d["grasped_frames"] for d in draws])))
+    fits = [d["fit_linear_rel_error"] for d in draws]
+    row["seeds"], row["fit_range"] = len(draws), [min(fits), max(fits)]
+    return row
+
+
+# The behaviour gate: checks of the whole system that the repo's tests make with a default hand (thresholds
+# from tests/python/test_joints.py and test_input.py). A count the fit rule picks becomes the default only if
+# a hand of it passes them as well as the current default does.
+GATE_BASE_PUSH_M = 0.015       # a hand holding the lid barely moves the base it grazes
+GATE_LID_SLAM_DEG_S = 60.0     # a lid held past its limit does not slam shut
+GATE_LID_FINAL_DEG = 85.0
+
+
+def behaviour(count, sampling, radius=0.0, seed=1, recordings=None):
+    """The behaviour gate for one hand (both hands of a recording get it): base push and lid slam
+    (handsim.experiments.core_issues) and, when `recordings` (a folder of Leap recordings) is given, how many
+    of input_report's expectations the replays meet."""
+    from ..experiments import core_issues
+
+    def hand(side):
+        return handsim.HandDef(handedness=side, particle_count=count, sampling=sampling, seed=seed,
+                               particle_radius=radius)
+    pushed, _, _ = core_issues.base_thrown_by_a_touch(0.004, hand_def=hand(R))
+    slam, final = core_issues.lid_bounces_off_upper_limit(105.0, hand_def=hand(R))
+    out = {"base_push_m": pushed, "lid_slam_deg_s": slam, "lid_final_deg": final,
+           "core_ok": pushed < GATE_BASE_PUSH_M and slam < GATE_LID_SLAM_DEG_S and final > GATE_LID_FINAL_DEG}
+    if recordings is not None:
+        out["leap_missed"] = _leap_misses(recordings, [hand(handsim.Handedness.RIGHT), hand(handsim.Handedness.LEFT)])
+    return out
+
+
+def _leap_misses(folder, hands):
+    """Per recording, the names of input_report's expectations its replays miss (empty lists included)."""
+    from .. import input_report, replay
+    from ..adapters.leap import load_leap_recording
+    missed = {}
+    for path in sorted(Path(folder).glob("*.json.lz")):
+        motion = replay.motion_from_leap(load_leap_recording(path))
+        runs = [replay.run(replay.session_from_motion(motion, scene, hand_defs=hands)) for scene in ("jewelry_box", "free_box")]
+        checks = input_report.expectations(motion, *runs)
+        missed[path.name.split(".")[0]] = sorted(k for k, ok in checks.items() if not ok)
+    return missed
+
+
+def gate(choice, radius, recordings):
+    """The gate for the project default (as HandDef() builds it) and for the rule's count at both samplings
+    with the fixed radius the rule chose it at."""
+    candidates = [(*project_default(), handsim.HandDef().particle_radius)]
+    if choice is not None:
+        candidates += [(s, choice["particles"], radius) for s in ("EVEN", "RANDOM")]
+    rows = []
+    for sampling, n, r in dict.fromkeys(candidates):
+        rows.append({"sampling": sampling, "particles": n, "radius_m": r,
+                     **behaviour(n, handsim.ParticleSampling.__members__[sampling], r, recordings=recordings)})
+    default = rows[0]
+    for r in rows:
+        r["passes"] = r["core_ok"] and (recordings is None or _missed_count(r) <= _missed_count(default))
+    return rows
+
+
+def _missed_count(row):
+    return sum(len(v) for v in row.get("leap_missed", {}).values())
+
+
+def project_default():
+    """(sampling name, particle count) of a default hand, read from the model HandDef() builds."""
+    d = handsim.HandDef()
+    return d.sampling.name, int(handsim.HandModel(d).particle_count)
 
 
 def choose_default(rows, fit_tol, grasp_tol=GRASP_TOL):
@@ -210,12 +299,15 @@ def choose_default(rows, fit_tol, grasp_tol=GRASP_TOL):
 
 
 def _headers():
-    return ["sampling", "particles", "radius mm", "fit |dv|/|v|", "fit |dw| rad/s", "grasp frames differing",
+    return ["sampling", "particles", "radius mm", "fit |dv|/|v| (seeds' range)", "fit |dw| rad/s", "grasp frames differing",
             "grasped frames", "deepest visible penetration mm", "step median us"]
 
 
 def _cells(r, frames):
-    return (r["sampling"], r["particles"], f"{r['radius_m'] * 1e3:.2f}", f"{r['fit_linear_rel_error']:.3f}",
+    fit = f"{r['fit_linear_rel_error']:.3f}"
+    if r.get("seeds", 1) > 1:
+        fit += f" ({r['fit_range'][0]:.3f}-{r['fit_range'][1]:.3f})"
+    return (r["sampling"], r["particles"], f"{r['radius_m'] * 1e3:.2f}", fit,
             f"{r['fit_angular_error_rad_s']:.3f}", f"{r['grasp_disagreement'] * 100:.1f}%",
             f"{r['grasped_frames']} / {frames}", f"{r['visible_penetration_m'] * 1e3:.2f}",
             f"{r['step_median_s'] * 1e6:.1f}")
@@ -232,7 +324,11 @@ def table(result):
                      format_table(_headers(), rows))
     return (f"particle count against error (load {result['load_average'][0]:.2f} -> "
             f"{result['load_average'][1]:.2f})\n\n" + "\n\n".join(parts) + "\n\nchosen (fixed radius): " +
-            ("none within tolerance" if c is None else f"{c['sampling']} {c['particles']}"))
+            ("none within tolerance" if c is None else f"{c['sampling']} {c['particles']}") +
+            "; project default: {} {}".format(*result["project_default"]) +
+            "".join(f"\ngate: {g['sampling']} {g['particles']} base {g['base_push_m'] * 1e3:.1f} mm, lid "
+                    f"{g['lid_slam_deg_s']:.0f} deg/s, Leap missed {_missed_count(g)}, passes {g['passes']}"
+                    for g in result.get("gate", [])))
 
 
 def plot(result, path):
@@ -281,9 +377,11 @@ def report(result):
              "box over the presses. Step: median world.step of one press held still.", ""]
     lines += _series_section(result, "fixed", "## Fixed radius: the sampling alone", (
         f"Every count and the reference use the default hand's particle radius, "
-        f"**{result['default_radius_m'] * 1e3:.2f} mm** (read from `HandModel(HandDef())`: 1,182 random "
-        "particles, radius from their spacing). Only which skin points carry a sphere changes, so the error is "
-        "what sampling costs. The default count is chosen from this table."))
+        f"**{result['default_radius_m'] * 1e3:.2f} mm** (read from `HandModel(HandDef())`; HandDef fixes it at the "
+        "radius the paper's 1,182 random particles get from their spacing). Only which skin points carry a "
+        "sphere changes, so the error is what sampling costs. The default count is chosen from this table. "
+        f"Random rows are the mean of {len(SEEDS)} draws (seeds {', '.join(map(str, SEEDS))}), the fit error's "
+        "range over them in brackets."))
     lines += _series_section(result, "spacing", "## Radius from the spacing: sampling and sphere size together", (
         "Each count gets the radius its own spacing gives (`HandDef.particle_radius = 0`), as a hand built with "
         "that count would have it, and so does the reference. Fewer particles means bigger spheres, which reach "
@@ -320,16 +418,53 @@ def _rule_section(result):
            "for more particles. Why "
            f"{c['grasp_tol']:.0%}: {int(c['grasp_tol'] * result['pinch_frames'])} of the {result['pinch_frames']} "
            "pinch frames, a flicker at the grasp boundary rather than a lid that is dropped.", ""]
+    default = result["project_default"]
+    now = f"{default[0].lower()} sampling, {default[1]} particles"
     if c["choice"] is None:
-        return out + ["By this run, **no count below the reference meets the rule**. The project default (1,182 "
-                      "random) is therefore not chosen from the study: a pending decision, see below.", ""]
+        return out + [f"By this run, **no count below the reference meets the rule**; the project default ({now}) "
+                      "is not backed by this run.", ""] + _gate_section(result)
     pick = f"{c['choice']['sampling'].lower()} sampling, {c['choice']['particles']} particles"
-    if (c["choice"]["sampling"], c["choice"]["particles"]) == ("RANDOM", 1182):
-        return out + [f"By this run: **{pick}**, the project default: the default is chosen from this study.", ""]
-    return out + [f"By this run: **{pick}**. This is not the project default (1,182 random), so the default "
-                  "is not yet chosen from the study. Changing it changes what every test, experiment and the golden "
-                  "determinism hash see with a default hand, so it is a **pending decision**, not made in this "
-                  "change; the default stays 1,182 random until it is taken.", ""]
+    if (c["choice"]["sampling"], c["choice"]["particles"]) == tuple(default):
+        return out + [f"By this run: **{pick}**, which is the project default (`HandDef()`): the default is "
+                      "chosen from this study.", ""] + _gate_section(result)
+    chosen = [g for g in result.get("gate", [])[1:] if g["sampling"] == c["choice"]["sampling"]]
+    if not chosen:
+        verdict = f"The behaviour gate did not run, so the default stays at {now}."
+    elif chosen[0]["passes"]:
+        verdict = (f"A hand of it passes the behaviour gate below, so the default should move to it; the project "
+                   f"default (`HandDef()`) is still {now}: **the default does not follow this run yet**.")
+    else:
+        verdict = (f"A hand of it **fails the behaviour gate** below, so the default stays at {now}: the fit rule "
+                   "alone is not enough to move it, and the default is a decision against the rule's pick, made "
+                   "on the gate.")
+    return out + [f"By this run the fit rule picks **{pick}**. " + verdict, ""] + _gate_section(result)
+
+
+def _gate_section(result):
+    rows = result.get("gate", [])
+    if not rows:
+        return []
+    leap = result.get("gate_recordings")
+    out = ["### Behaviour gate", "",
+           "Before a count becomes the default, a hand of it must pass what the repo's tests ask of the default "
+           "hand: a hand holding the lid moves the base it grazes by < "
+           f"{GATE_BASE_PUSH_M * 1e3:.0f} mm (`core_issues.base_thrown_by_a_touch`, 4 mm deep), a lid held to 105 deg "
+           f"closes at < {GATE_LID_SLAM_DEG_S:.0f} deg/s and rests above {GATE_LID_FINAL_DEG:.0f} deg "
+           "(`lid_bounces_off_upper_limit`)" +
+           (", and the real Leap recordings (docs/input.md) miss no more expectations than with the default hand."
+            if leap else "; the Leap recordings were not available (or --quick), so they are not part of this run."),
+           "", "| hand | radius mm | base pushed mm | lid closing deg/s | lid final deg | Leap expectations missed | "
+           "passes |", "|---|---|---|---|---|---|---|"]
+    for g in rows:
+        missed = "; ".join(f"{k}: {', '.join(v)}" for k, v in g.get("leap_missed", {}).items() if v) or "none"
+        out.append(f"| {g['sampling'].lower()} {g['particles']} | {g['radius_m'] * 1e3:.2f} | "
+                   f"{g['base_push_m'] * 1e3:.1f} | {g['lid_slam_deg_s']:.0f} | {g['lid_final_deg']:.1f} | "
+                   f"{missed if leap else 'not run'} | {'yes' if g['passes'] else '**no**'} |")
+    return out + ["", "The first row is the project default (radius 0 in `HandDef`: from its spacing). The gate's "
+                  "checks are outcomes of contact-rich motion, which flip on small changes of the particle set "
+                  "(docs/input.md, *Shortfalls*); the tests were written with the default hand, so it passes them "
+                  "by construction, and a failing candidate shows that moving the default needs those scenes "
+                  "re-examined, not that the candidate is less accurate.", ""]
 
 
 def _reading(result):
@@ -342,16 +477,16 @@ def _reading(result):
            f"- Fixed radius, pose fit within the tolerance: {', '.join(passing) or 'no row'}.",
            f"- Fixed radius, grasp decision over the tolerance: random at {_counts(bad['RANDOM'])}; even at "
            f"{_counts(bad['EVEN'])}. The grasp decision is not what separates the counts; the pose fit is."]
-    default = [r for r in fixed if (r["sampling"], r["particles"]) == ("RANDOM", 1182)]
-    if default:
-        d = default[0]
-        out.append(f"- The default (1,182 random) fits with |dv|/|v| = {d['fit_linear_rel_error']:.3f}, "
-                   f"{d['fit_linear_rel_error'] / tol:.1f} x the tolerance.")
+    for label, key in (("The project default", tuple(result["project_default"])), ("The paper's", ("RANDOM", 1182))):
+        for d in (r for r in fixed if (r["sampling"], r["particles"]) == key):
+            out.append(f"- {label} ({d['particles']} {d['sampling'].lower()}) fits with |dv|/|v| = "
+                       f"{d['fit_linear_rel_error']:.3f}, {d['fit_linear_rel_error'] / tol:.1f} x the tolerance, at "
+                       f"{d['step_median_s'] * 1e6:.1f} us a step.")
     return out + [
         f"- The spacing-radius table shows the old study's flaw: its reference's spheres ({_radii(result, 'all')}) "
         f"are smaller than every count's ({_radii(result, 'RANDOM')}), so its error is mostly the sphere size.",
-        "- Each random row is one draw (HandDef's seed 1); another seed moves its error, so where both samplings "
-        "of one count pass, the count is the finding and the sampling a tie-break.",
+        "- A random row's error moves with its draw (the ranges above), so where both samplings of one count "
+        "pass, the count is the finding and the sampling a tie-break.",
         "- The deepest visible penetration is set by the render deformation's falloff (the render mesh is pushed "
         "out only near displaced particles), so it is reported but does not choose the count.", ""]
 

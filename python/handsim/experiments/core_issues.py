@@ -17,15 +17,17 @@ from .. import users as _users
 R = _h.Handedness.RIGHT
 
 
-def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015):
+def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015,
+                           hand_def=None):
     """A right hand pinches the closed lid (lid_pinch_palm, lid_pinch_shape) with its palm `depth_m` closer
     to the hinge than the scene's pose, so the thumb grazes the base's front face, and swings the lid open
-    over one second. Returns (base displacement m, max particles touching the base, lid grasped)."""
+    over one second. Returns (base displacement m, max particles touching the base, lid grasped). `hand_def`:
+    a right-hand HandDef (default: HandDef())."""
     w = _h.World()
     d = _h.JewelryBoxDef()
     d.lid_overhang = lid_overhang
     box = _h.build_jewelry_box(w, d)
-    hand = w.add_hand(_h.HandDef())
+    hand = w.add_hand(hand_def or _h.HandDef())
     b0 = np.asarray(w.body_pose(box.base), float)
     touching, grasped = 0, False
     shape = _h.lid_pinch_shape()
@@ -41,14 +43,15 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
     return moved, touching, grasped
 
 
-def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015):
+def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015, hand_def=None):
     """The hand pinches the lid, swings it (min-jerk, 1.2 s) to `swing_deg`, past the 90 deg limit, and holds
-    still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg)."""
+    still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg).
+    `hand_def`: a right-hand HandDef (default: HandDef())."""
     w = _h.World()
     d = _h.JewelryBoxDef()
     d.lid_overhang = lid_overhang
     box = _h.build_jewelry_box(w, d)
-    w.add_hand(_h.HandDef())
+    w.add_hand(hand_def or _h.HandDef())
     closed = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
     reached, worst = False, 0.0
     for i in range(200):
