@@ -143,9 +143,14 @@ namespace {
 // (the experiments saw a lid held past its limit slammed shut at 650 deg/s; recorded Leap fists closing on a
 // cube never grasped it, their fingertips answered with the far face). A particle keeps the face it entered through for as long as its
 // centre stays inside the body, and its contact is measured against that face's plane. The face is taken
-// afresh whenever the centre is outside (a finger sliding round an edge changes face legitimately); a
+// afresh when the centre is outside (a finger sliding round an edge changes face legitimately); a
 // centre already inside at its first contact (a fast hand, a falling lid) takes the face it crossed, found
-// by going back along its velocity relative to the body.
+// by going back along its velocity relative to the body. A particle whose centre has just come out on the far
+// side still keeps its entry face: it crossed the body, it did not come from there.
+// Two faces whose outward normals are further apart than this are on opposite sides of the body (a box's
+// adjacent faces are at 0, its opposite ones at -1).
+constexpr double kOppositeFaces = -0.5;
+
 void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body& body,
                       const HandMotionHistory& hand, const std::vector<EntryFace>& previous,
                       std::vector<EntryFace>& faces, std::vector<ParticleContact>& contacts) {
@@ -161,8 +166,12 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
     const bool inside = c.depth > radius;  // the centre is behind the surface
     EntryFace face{c.particle, R.transpose() * c.normal, 0};
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
+    const bool touched_before = prev != previous.end() && prev->particle == c.particle;
     bool replaced = false;
-    if (inside && prev != previous.end() && prev->particle == c.particle) {
+    if (touched_before && (inside || prev->normal.dot(face.normal) < kOppositeFaces)) {
+      // Inside, or leaving through the far side: a particle that was in contact last frame and is now nearest
+      // the face opposite the one it entered through has crossed the body, and answering it with that face
+      // would push the body back the way the hand came (a hand driven past a lid's stop flung the lid shut).
       face = *prev;
       replaced = true;
     } else if (inside && hand.has_velocity()) {

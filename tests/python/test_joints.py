@@ -334,6 +334,15 @@ def test_a_lid_held_past_its_limit_stays_open(swing_deg):
     assert final > 85.0
 
 
+def test_a_hand_driven_through_a_lid_at_its_stop_does_not_fling_it_shut():
+    """The denser hand of the particle study loses its pinch as it swings 15 deg past the stop, and its thumb
+    comes out through the lid's outer face. Answered with that face, it pushed the lid shut at 143 deg/s and
+    the lid fell from upright at 631 deg/s; particles that leave through the far side keep their entry face."""
+    from handsim.experiments import core_issues
+    closing_rate, final = core_issues.lid_bounces_off_upper_limit(105.0, hand_def=core_issues.dense_hand())
+    assert closing_rate < 60.0 and final > 85.0
+
+
 # --- the benchmark's report -----------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
