@@ -319,7 +319,8 @@ int rigid_part(const HandModel& model, int p) {
   model.particle_weights.col(p).maxCoeff(&k);
   const int bone = model.particle_bones(k, p);
   switch (bone) {
-    case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal: case kLittleMetacarpal:
+    case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal:
+    case kLittleMetacarpal:
       return kPalm;
     case kThumbTip: case kIndexTip: case kMiddleTip: case kRingTip: case kLittleTip:
       return bone - 1;
