@@ -13,6 +13,7 @@ HANDSIM_C_FIELDS(handsim_grasp_settings, GraspSettings) {
   f(c.frames_to_grasp, d.frames_to_grasp);
   f(c.frames_to_release, d.frames_to_release);
   f(c.velocity_window, d.velocity_window);
+  f(c.across_parts, d.across_parts);
 }
 
 HANDSIM_C_FIELDS(handsim_world_settings, WorldDef) {

@@ -103,7 +103,7 @@ typedef struct handsim_grasp_settings {
   int32_t frames_to_grasp;
   int32_t frames_to_release;
   int32_t velocity_window;
-  int32_t reserved;         /* 0 */
+  int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
 } handsim_grasp_settings;
 
 /* Mirrors handsim::WorldDef. */

@@ -170,7 +170,7 @@ namespace Handsim
         public int FramesToGrasp;
         public int FramesToRelease;
         public int VelocityWindow;
-        public int Reserved;
+        public int AcrossParts;  // bool
     }
 
     [StructLayout(LayoutKind.Sequential)]

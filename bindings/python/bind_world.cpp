@@ -88,6 +88,8 @@ void bind_defs(py::module_& m) {
   py::class_<GraspSettings>(m, "GraspSettings", "Grasp decision (eq. 3), hysteresis, release and tracking grace.")
       .def(py::init([](py::kwargs kw) { return from_kwargs<GraspSettings>(kw, "GraspSettings"); }))
       .def_readwrite("cos_threshold", &GraspSettings::cos_threshold)
+      .def_readwrite("across_parts", &GraspSettings::across_parts,
+                     "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)")
       .def_readwrite("frames_to_grasp", &GraspSettings::frames_to_grasp)
       .def_readwrite("frames_to_release", &GraspSettings::frames_to_release)
       .def_readwrite("release_distance", &GraspSettings::release_distance)

@@ -81,6 +81,17 @@ bool opposing_contacts(const std::vector<Vec3>& directions, double c) {
   return scan_pairs(d, axis, c);
 }
 
+bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vector<int>& parts, double c) {
+  if (parts.size() != directions.size())
+    validate::fail("parts", "must have one label per direction, got " + std::to_string(parts.size()) + " for " +
+                                std::to_string(directions.size()));
+  if (!opposing_contacts(directions, c)) return false;  // validates; most frames end here
+  for (size_t i = 0; i < directions.size(); ++i)
+    for (size_t j = i + 1; j < directions.size(); ++j)
+      if (parts[i] != parts[j] && directions[i].dot(directions[j]) < c) return true;
+  return false;
+}
+
 void validate_grasp_settings(const GraspSettings& s) {
   validate::finite(s.cos_threshold, "cos_threshold");
   if (s.frames_to_grasp < 1) validate::fail("frames_to_grasp", "must be >= 1, got " + std::to_string(s.frames_to_grasp));

@@ -18,6 +18,11 @@ namespace handsim {
 // a pair scan pruned by the angle to the mean direction, O(n^2) only for adversarial rings of directions.
 bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos);
 
+// opposing_contacts restricted to pairs whose parts differ (parts[i] labels directions[i], same length).
+// Checks the unrestricted test first (O(n) in the common cases), then scans pairs of different parts.
+bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vector<int>& parts,
+                           double c = kOpposingCos);
+
 enum class GraspState { Free, Grasped };
 enum class GraspEventType { None, GraspBegin, GraspEnd };
 enum class ReleaseReason { None, Released, TrackingLost };

@@ -317,9 +317,33 @@ std::string World::Impl::deform_hands() {
   return std::to_string(deformed) + " particle(s) pushed back to a surface";
 }
 
+namespace {
+
+// The rigid part of the hand particle p moves with (GraspSettings::across_parts): its most weighted bone, with
+// the palm, the wrist and the five metacarpals as one part (kPalm) and a tip as part of its distal bone. The
+// thumb's metacarpal (the ball of the thumb) counts as palm: a flat palm pressed 3-10 mm down onto a box
+// touched opposite faces with it and the palm; the thumb opposes with its phalanges.
+int rigid_part(const HandModel& model, int p) {
+  int k = 0;
+  model.particle_weights.col(p).maxCoeff(&k);
+  const int bone = model.particle_bones(k, p);
+  switch (bone) {
+    case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal:
+    case kLittleMetacarpal:
+      return kPalm;
+    case kThumbTip: case kIndexTip: case kMiddleTip: case kRingTip: case kLittleTip:
+      return bone - 1;
+    default:
+      return bone;
+  }
+}
+
+}  // namespace
+
 // --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
 std::string World::Impl::decide_grasps(double dt) {
   std::vector<Vec3> directions;
+  std::vector<int> parts;
   int decided = 0;
   for (auto it = pairs.begin(); it != pairs.end();) {
     const uint32_t hi = it->first.first, bi = it->first.second;
@@ -332,8 +356,16 @@ std::string World::Impl::decide_grasps(double dt) {
     pair.previous_count = count;
     if (b.manipulable()) {
       directions.clear();
-      for (const ParticleContact& c : pair.contacts) directions.push_back(c.normal);
-      const bool opposing = count >= 2 && opposing_contacts(directions, def.grasp.cos_threshold);
+      parts.clear();
+      for (const ParticleContact& c : pair.contacts) {
+        directions.push_back(c.normal);
+        parts.push_back(rigid_part(*hands[hi].model, c.particle));
+      }
+      // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it.
+      const double cos = def.grasp.cos_threshold;
+      const bool across = def.grasp.across_parts && !pair.tracker.grasped();
+      const bool opposing = count >= 2 && (across ? opposing_across_parts(directions, parts, cos)
+                                                  : opposing_contacts(directions, cos));
       const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
       if (e.type == GraspEventType::GraspEnd)
         end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,

@@ -29,8 +29,8 @@ from . import scenes as _scenes
 FORMAT = "handsim-recording"
 FORMAT_VERSION = 1
 J = _core.JOINT_COUNT
-_GRASP_FIELDS = ("cos_threshold", "frames_to_grasp", "frames_to_release", "release_distance", "tracking_grace_s",
-                 "velocity_window")
+_GRASP_FIELDS = ("cos_threshold", "across_parts", "frames_to_grasp", "frames_to_release", "release_distance",
+                 "tracking_grace_s", "velocity_window")
 _WORLD_FIELDS = ("fixed_substep", "max_substeps", "ground", "ground_friction", "ground_height",
                  "joint_max_iterations", "solver_iterations", "paper_pipeline")
 _HAND_FIELDS = ("particle_count", "seed", "particle_radius", "render_vertices")

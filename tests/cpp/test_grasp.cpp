@@ -57,6 +57,15 @@ TEST(OpposingContacts, PinchFromOppositeSides) {
   EXPECT_FALSE(opposing_contacts({thumb, near}, kPaperLiteralCos));
 }
 
+// GraspSettings::across_parts: a pair of one rigid part (the edge of a hand draped over a box) does not count.
+TEST(OpposingContacts, AcrossPartsNeedsTwoParts) {
+  const std::vector<Vec3> d = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY()};
+  EXPECT_FALSE(opposing_across_parts(d, {0, 0, 7}));
+  EXPECT_TRUE(opposing_across_parts(d, {0, 4, 4}));
+  EXPECT_FALSE(opposing_across_parts({Vec3::UnitY(), Vec3::UnitY()}, {0, 4}));
+  EXPECT_THROW(opposing_across_parts(d, {0, 4}), Error);
+}
+
 TEST(OpposingContacts, FewerThanTwoOrIdenticalNeverOppose) {
   EXPECT_FALSE(opposing_contacts({}));
   EXPECT_FALSE(opposing_contacts({Vec3::UnitX()}));

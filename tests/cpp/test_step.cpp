@@ -314,6 +314,49 @@ TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
   EXPECT_LE(deepest_drawn, 1e-9);
 }
 
+// A hand pressed down onto the 4 cm cube on the ground, `depth` (m) below its top: the skin beside the cube's
+// edges touches opposite side faces, all of it one rigid part (the palm, or the edge of the hand as in the
+// Leap recording three-claps). `turn` rotates the hand about its finger axis (0: palm down). Lowered over 20
+// frames, then held for 30; returns the GraspBegin count. The particle count is explicit (the default may change).
+int grasps_pressing_down(double turn, double depth, bool across_parts) {
+  WorldDef def;
+  def.grasp.across_parts = across_parts;
+  World world(def);
+  HandDef hand_def;
+  hand_def.particle_count = 1182;
+  const HandId hand = world.add_hand(hand_def);
+  const BodyId box = world.add_body(cube(Vec3(0, kHalf, 0)));
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  // Where the particles under the palm joint are, for the hand at the origin turned by `turn`.
+  const Quat q(Eigen::AngleAxisd(turn, Vec3::UnitZ()));
+  HandState state;
+  const HandFrame at_origin = make_hand_frame(Handedness::Right, Pose{Vec3::Zero(), q});
+  pose_hand(world.hand_model(hand), at_origin, state);
+  const Vec3 palm = at_origin.joints[kPalm].position;
+  double lowest = 0;
+  for (Eigen::Index p = 0; p < state.tracked_positions.cols(); ++p) {
+    const Vec3 x = state.tracked_positions.col(p);
+    if (std::hypot(x.x() - palm.x(), x.z() - palm.z()) < kHalf) lowest = std::min(lowest, x.y());
+  }
+  int grasps = 0;
+  for (int i = 0; i <= 50; ++i) {
+    const double y = 2 * kHalf - depth * std::min(1.0, i / 20.0) - lowest + 0.01 * std::max(0.0, 1 - i / 10.0);
+    world.step(kDt, {make_hand_frame(Handedness::Right, Pose{Vec3(-palm.x(), y, -palm.z()), q})});
+    grasps += count(world.events(), EventType::GraspBegin);
+  }
+  return grasps;
+}
+
+// docs/grasp.md: contacts of one rigid part of the hand do not grasp. The palm pressed 1 cm down onto a box
+// on the ground, and the edge of the hand pressed 3 mm onto it, grasped it with any two contacts counting.
+TEST(Step, HandPressedDownOntoABoxDoesNotGraspIt) {
+  for (double turn : {0.0, -M_PI / 2}) {
+    const double depth = turn == 0 ? 0.01 : 0.003;
+    EXPECT_GE(grasps_pressing_down(turn, depth, false), 1) << "turn " << turn << ": the rule before grasps";
+    EXPECT_EQ(grasps_pressing_down(turn, depth, true), 0) << "turn " << turn;
+  }
+}
+
 // Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
 // one grasp begins and ends. Without hysteresis (1 frame each way, no release margin) the same input flickers,
 // which shows that the count would catch it.

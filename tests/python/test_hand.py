@@ -466,9 +466,11 @@ def test_grasp_settings_and_particle_contacts_on_the_world_def():
     d = handsim.WorldDef(grasp=handsim.GraspSettings(cos_threshold=handsim.PAPER_LITERAL_COS, frames_to_grasp=3),
                          particle_contacts=handsim.ParticleContacts.BULLET_OBJECTS)
     d.grasp.frames_to_release = 5
+    assert d.grasp.across_parts  # docs/grasp.md: one rigid part of the hand does not grasp
+    d.grasp.across_parts = False
     world = handsim.World(d)
     assert world.definition.grasp.cos_threshold == 0.7 and world.definition.grasp.frames_to_grasp == 3
-    assert world.definition.grasp.frames_to_release == 5
+    assert world.definition.grasp.frames_to_release == 5 and not world.definition.grasp.across_parts
     assert world.definition.particle_contacts == handsim.ParticleContacts.BULLET_OBJECTS
     with pytest.raises(TypeError, match="unexpected keyword argument 'threshold'"):
         handsim.GraspSettings(threshold=1)

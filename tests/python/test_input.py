@@ -544,10 +544,10 @@ def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings)
     if steps is None:
         checks = input_report.expectations(motion, jewelry, free)
         missed = {k for k, ok in checks.items() if not ok}
-        # docs/input.md, "Shortfalls": the clapping right hand, fingers pointing down, reaches round the top of
-        # the cube placed under it and its contacts oppose: eq. 3 calls that a grasp. Any other miss, or this
-        # one turning into a pass, fails here so that the doc gets updated.
+        # docs/input.md, "Shortfalls": confidence2-49fps's only grasp of the cube was one thumb phalanx touching
+        # opposite faces, which GraspSettings.across_parts does not count. Any other miss, or this one turning
+        # into a pass, fails here so that the doc gets updated.
         assert missed == KNOWN_MISSES.get(name, set()), checks
 
 
-KNOWN_MISSES = {"three-claps": {"no grasp of the cube"}}
+KNOWN_MISSES = {"confidence2-49fps": {"cube grasped", "not before the closure"}}

@@ -15,6 +15,16 @@ constexpr double kPaperLiteralCos = 0.7;
 // Defaults assume a 60 Hz tracker; they were chosen by measurement (docs/grasp.md has the table and the command).
 struct GraspSettings {
   double cos_threshold = kOpposingCos;  // c of opposing_contacts (see kPaperLiteralCos)
+  // The opposing pair must come from two different rigid parts of the hand: the palm (wrist, palm and the five
+  // metacarpals) or one phalanx (its tip included). One rigid part cannot squeeze: the edge of the clapping
+  // hand in the Leap recording three-claps lay on a cube and draped over its front and back top edges (palm
+  // against palm, "grasped" from 0.83 s), and a flat palm pressed down onto a box touches opposite side faces.
+  // Measured on the Leap recordings (docs/grasp.md): it removes both and keeps the first grasp frame of
+  // every pinch and grab but one. A grasp in progress keeps any opposing pair (a thumb swung through a thin
+  // held lid must not drop it mid-swing: core_issues' lid slammed shut at 650 deg/s when the rule also ended
+  // grasps).
+  // false: any two contacts (the rule before).
+  bool across_parts = true;
   // 2 frames (17 ms of latency): 1 grabs on a single frame of touch (a thumb dithering +-1 mm at first touch
   // grabbed at once); 2 made no grasp event in 2 s of such dithering.
   int frames_to_grasp = 2;
