@@ -46,7 +46,8 @@ bool cone_excludes(const std::vector<Vec3>& d, const Vec3& axis, double c) {
 // Exact scan. theta_i = angle of d_i to the axis; the angle between d_i and d_j is at most theta_i + theta_j,
 // so d_i . d_j < c needs theta_i + theta_j > acos(c). With the thetas sorted in decreasing order, each row of
 // the scan stops at the first partner too close to the axis, and the whole scan stops at the first empty row.
-bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c) {
+// With `parts`, pairs of one part are skipped (the bound does not depend on the parts, so it still prunes).
+bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c, const std::vector<int>* parts = nullptr) {
   const size_t n = d.size();
   std::vector<double> theta(n);
   for (size_t i = 0; i < n; ++i) theta[i] = std::acos(std::clamp(d[i].dot(axis), -1.0, 1.0));
@@ -58,9 +59,17 @@ bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c) {
     const size_t i = order[a];
     if (theta[i] + theta[order[a + 1]] <= needed) return false;
     for (size_t b = a + 1; b < n && theta[i] + theta[order[b]] > needed; ++b)
-      if (d[i].dot(d[order[b]]) < c) return true;
+      if ((!parts || (*parts)[i] != (*parts)[order[b]]) && d[i].dot(d[order[b]]) < c) return true;
   }
   return false;
+}
+
+// The mean direction; a mean that nearly cancels (directions all around) is no useful axis, x is as good as
+// any then.
+Vec3 mean_axis(const std::vector<Vec3>& d) {
+  Vec3 mean = Vec3::Zero();
+  for (const Vec3& di : d) mean += di;
+  return mean.norm() > 1e-6 * double(d.size()) ? Vec3(mean.normalized()) : Vec3(Vec3::UnitX());
 }
 
 }  // namespace
@@ -71,10 +80,7 @@ bool opposing_contacts(const std::vector<Vec3>& directions, double c) {
   const auto& d = directions;
   if (d.size() < 2) return false;
   if (c > 1.0 + kDotMargin) return true;  // every pair qualifies
-  Vec3 mean = Vec3::Zero();
-  for (const Vec3& di : d) mean += di;
-  // A mean that nearly cancels (directions all around) is no useful axis; x is as good as any then.
-  Vec3 axis = mean.norm() > 1e-6 * double(d.size()) ? Vec3(mean.normalized()) : Vec3(Vec3::UnitX());
+  const Vec3 axis = mean_axis(d);
   for (const Vec3& a : {axis, Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ())})
     if (extremes_oppose(d, a, c)) return true;
   if (cone_excludes(d, axis, c)) return false;
@@ -86,10 +92,8 @@ bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vecto
     validate::fail("parts", "must have one label per direction, got " + std::to_string(parts.size()) + " for " +
                                 std::to_string(directions.size()));
   if (!opposing_contacts(directions, c)) return false;  // validates; most frames end here
-  for (size_t i = 0; i < directions.size(); ++i)
-    for (size_t j = i + 1; j < directions.size(); ++j)
-      if (parts[i] != parts[j] && directions[i].dot(directions[j]) < c) return true;
-  return false;
+  if (c > 1.0 + kDotMargin) return std::any_of(parts.begin(), parts.end(), [&](int p) { return p != parts[0]; });
+  return scan_pairs(directions, mean_axis(directions), c, &parts);
 }
 
 void validate_grasp_settings(const GraspSettings& s) {

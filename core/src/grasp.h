@@ -19,7 +19,7 @@ namespace handsim {
 bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos);
 
 // opposing_contacts restricted to pairs whose parts differ (parts[i] labels directions[i], same length).
-// Checks the unrestricted test first (O(n) in the common cases), then scans pairs of different parts.
+// Checks the unrestricted test first (O(n) in the common cases), then the pruned pair scan, skipping pairs of one part.
 bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vector<int>& parts,
                            double c = kOpposingCos);
 

@@ -10,10 +10,10 @@ using namespace handsim;
 
 namespace {
 
-bool brute_force(const std::vector<Vec3>& d, double c) {
+bool brute_force(const std::vector<Vec3>& d, double c, const std::vector<int>* parts = nullptr) {
   for (size_t i = 0; i < d.size(); ++i)
     for (size_t j = i + 1; j < d.size(); ++j)
-      if (d[i].dot(d[j]) < c) return true;
+      if ((!parts || (*parts)[i] != (*parts)[j]) && d[i].dot(d[j]) < c) return true;
   return false;
 }
 
@@ -77,7 +77,7 @@ TEST(OpposingContacts, FewerThanTwoOrIdenticalNeverOppose) {
 TEST(OpposingContacts, MatchesBruteForceOnRandomSets) {
   std::mt19937_64 gen(7);
   std::uniform_real_distribution<double> u(0, 1);
-  int agree = 0, positives = 0;
+  int agree = 0, positives = 0, across_positives = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     int n = 2 + int(u(gen) * 40);
     std::vector<Vec3> d;
@@ -96,14 +96,21 @@ TEST(OpposingContacts, MatchesBruteForceOnRandomSets) {
         }
       }
     }
+    // three parts, so that many opposing pairs lie within one part
+    std::vector<int> parts;
+    for (int i = 0; i < n; ++i) parts.push_back(int(u(gen) * 3));
     for (double c : {-0.99, -0.7, 0.0, 0.7, 0.95}) {
       bool expected = brute_force(d, c);
       positives += expected;
       agree += opposing_contacts(d, c) == expected;
       ASSERT_EQ(opposing_contacts(d, c), expected) << "trial " << trial << " c " << c;
+      const bool across = brute_force(d, c, &parts);
+      across_positives += across;
+      ASSERT_EQ(opposing_across_parts(d, parts, c), across) << "trial " << trial << " c " << c << " (parts)";
     }
   }
   EXPECT_EQ(agree, 15000);
+  EXPECT_GT(positives - across_positives, 100);  // the parts did exclude pairs
   EXPECT_GT(positives, 1000);
   EXPECT_LT(positives, 14000);
 }
