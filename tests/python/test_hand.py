@@ -687,3 +687,10 @@ def test_gltf_needs_pygltflib_only_when_loading(monkeypatch, tmp_path):
     path.write_text("{}")
     with pytest.raises(ImportError, match=r"needs pygltflib.*pip install 'handsim\[gltf\]'"):
         gltf.load_gltf_hand(path)
+
+
+def test_hand_bench_times_the_model_build_of_the_default_and_the_study_pick():
+    from handsim.bench import hand as hand_bench
+    rows = hand_bench.bench_model_build(1)
+    assert [r["hand"] for r in rows] == ["default (HandDef())", "3,000 even"]
+    assert all(0 < r["median_s"] <= r["p99_s"] for r in rows)

@@ -551,3 +551,15 @@ def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings)
 
 
 KNOWN_MISSES = {"confidence2-49fps": {"cube grasped", "not before the closure"}}
+
+
+def test_three_claps_grasps_only_without_the_two_part_rule(leap_recordings):
+    """docs/grasp.md, eq. 3: the clapping hand's palm drapes over the cube's top edges. Without
+    GraspSettings.across_parts eq. 3 calls that a grasp (from 0.83 s); with it, nothing is grasped."""
+    motion = replay.motion_from_leap(leap_recordings["three-claps"])
+    old = handsim.WorldDef()
+    old.grasp.across_parts = False
+    before = replay.run(replay.session_from_motion(motion, "free_box", world_def=old), "three-claps")
+    after = replay.run(replay.session_from_motion(motion, "free_box"), "three-claps")
+    assert before.grasps.get("box", 0) >= 1 and abs(before.first_grasp_s - 0.83) < 0.01
+    assert not after.grasps

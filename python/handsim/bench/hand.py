@@ -90,6 +90,16 @@ def bench_gaps(seeds):
     return rows
 
 
+def bench_model_build(repeats):
+    """World.add_hand builds its model afresh (mesh, sampling, render falloff): the default hand and the
+    particle study's pick (3,000 evenly sampled particles)."""
+    rows = []
+    for label, d in (("default (HandDef())", handsim.HandDef()),
+                     ("3,000 even", handsim.HandDef(particle_count=3000, sampling=handsim.ParticleSampling.EVEN))):
+        rows.append({"hand": label, **summary(time_calls(lambda: handsim.HandModel(d), repeats, warmup=1))})
+    return rows
+
+
 def run(quick=False):
     repeats = 100 if quick else 1000
     return {
@@ -97,6 +107,7 @@ def run(quick=False):
         **bench_skinning(repeats),
         "contacts": bench_contacts(repeats),
         "gaps": bench_gaps([1] if quick else [1, 2, 3, 4, 5]),
+        "model_build": bench_model_build(2 if quick else 7),
     }
 
 
@@ -123,7 +134,9 @@ def table(result):
         for g in result["gaps"]])
     agree = (f"same particles, depths within {c['max_depth_difference_m']:.1e} m" if c["same_particles"]
              else "DIFFERENT particles")
+    build = format_table(["hand model", "median ms"], [(b["hand"], f"{b['median_s'] * 1e3:.0f}")
+                                                       for b in result["model_build"]])
     return (f"virtual hand (medians of {result['repeats']} repeats, one thread)\n{timing}\n"
             f"Bullet objects / closed form: {c['bullet_over_closed_form']:.1f}x ({agree}; "
             f"{c['particles']} particles of a hand pressed {c['press_depth_m'] * 100:.0f} cm into a box)\n\n"
-            f"largest particle gap (bind pose)\n{gaps}")
+            f"largest particle gap (bind pose)\n{gaps}\n\nbuilding a hand model (World.add_hand)\n{build}")
