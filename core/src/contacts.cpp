@@ -241,7 +241,8 @@ void collide_particles(const Eigen::Matrix3Xd& centres, double radius, const Sha
   collide_particles(centres, radius, prepare_shape(shape), body_pose, out);
 }
 
-bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, Vec3& normal, double& offset) {
+bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double max_time, Vec3& normal,
+                double& offset) {
   double best = std::numeric_limits<double>::infinity();
   auto consider = [&](const Vec3& n, double d) {  // plane n . x = d; going back along -u leaves through it?
     const double away = -n.dot(u);
@@ -259,7 +260,7 @@ bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, Vec3& nor
   } else if (ps.shape.type == ShapeType::ConvexHull) {
     for (const Eigen::Vector4d& p : ps.planes) consider(p.head<3>(), p[3]);
   }
-  return std::isfinite(best);
+  return best <= max_time;
 }
 
 void shape_world_bounds(const ShapeDef& shape, const Pose& pose, Vec3& lo, Vec3& hi) {

@@ -109,6 +109,8 @@ struct EntryFace {
   int particle = -1;
   Vec3 normal = Vec3::UnitY();
   double offset = 0;
+  bool crossing = false;  // the centre was inside, or is coming out on the far side (keep_entry_faces)
+  double depth = 0;       // the depth the face gave the contact
 };
 
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
@@ -191,7 +193,7 @@ struct World::Impl {
 
   // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.
   std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
-  std::string detect_contacts();
+  std::string detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
                             std::vector<std::pair<int, int>>& ranges) const;

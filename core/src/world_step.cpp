@@ -26,7 +26,7 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
     w.reports.push_back({name, seconds, ran, std::move(why)});
   };
   stage("skinning", [&] { return w.pose_hands(frames, dt); });       // lines 1-2: eq. 1, particle positions
-  stage("contacts", [&] { return w.detect_contacts(); });        // line 3
+  stage("contacts", [&] { return w.detect_contacts(dt); });      // line 3
   stage("deformation", [&] { return w.deform_hands(); });        // particles pushed back to the surface
   stage("grasp", [&] { return w.decide_grasps(dt); });           // lines 4-9, 11-13, 16: eq. 3
   stage("attach", [&] { return w.follow_primary_hands(); });     // lines 10, 14
@@ -150,9 +150,11 @@ namespace {
 // Two faces whose outward normals are further apart than this are on opposite sides of the body (a box's
 // adjacent faces are at 0, its opposite ones at -1).
 constexpr double kOppositeFaces = -0.5;
+// How many frames back along its relative velocity a first contact's crossing may lie (see entry_face).
+constexpr double kEntryFrames = 2.0;
 
 void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body& body,
-                      const HandMotionHistory& hand, const std::vector<EntryFace>& previous,
+                      const HandMotionHistory& hand, double dt, const std::vector<EntryFace>& previous,
                       std::vector<EntryFace>& faces, std::vector<ParticleContact>& contacts) {
   faces.clear();
   if (contacts.empty()) return;
@@ -167,30 +169,44 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
     EntryFace face{c.particle, R.transpose() * c.normal, 0};
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
     const bool touched_before = prev != previous.end() && prev->particle == c.particle;
+    const Vec3 relative = (hand.has_velocity() ? hand.point_velocity(x) : Vec3::Zero()) - body.linear -
+                          body.angular.cross(x - pose.position);
+    // How much deeper the entry face may say a particle coming out on the far side is than last frame: as far
+    // as it moved relative to the body in two frames (slack for the lag of the velocity estimate), plus a
+    // radius. More and it did not cross the body this frame (an 18 cm base, knocked spinning under the
+    // fingers of the experiments' left hand, was thrown 13 cm by two particles answered with its far face).
+    const double reach = relative.norm() * kEntryFrames * dt + radius;
     bool replaced = false;
-    if (touched_before && (inside || prev->normal.dot(face.normal) < kOppositeFaces)) {
-      // Inside, or leaving through the far side: a particle that was in contact last frame and is now nearest
-      // the face opposite the one it entered through has crossed the body, and answering it with that face
-      // would push the body back the way the hand came (a hand driven past a lid's stop flung the lid shut).
+    if (touched_before && (inside || (prev->crossing && prev->normal.dot(face.normal) < kOppositeFaces &&
+                                      radius - (prev->normal.dot(l) - prev->offset) <= prev->depth + reach))) {
+      // Inside, or leaving through the far side: a particle that was inside (or leaving) last frame and is now
+      // nearest the face opposite the one it entered through, within its reach, has crossed the body, and
+      // answering it with that face would push the body back the way the hand came (a hand driven past a
+      // lid's stop flung the lid shut). One that only touched the near face from outside has not crossed
+      // anything.
       face = *prev;
       replaced = true;
     } else if (inside && hand.has_velocity()) {
-      const Vec3 relative = hand.point_velocity(x) - body.linear - body.angular.cross(x - pose.position);
-      replaced = entry_face(body.prepared, l, R.transpose() * relative, face.normal, face.offset);
+      // A centre inside at its first contact crossed the surface within the last frame; two frames of slack
+      // for the lag of the velocity estimate (a 4-sample slope).
+      replaced = entry_face(body.prepared, l, R.transpose() * relative, kEntryFrames * dt, face.normal, face.offset);
     }
+    face.crossing = inside || replaced;
+    if (replaced) {
+      const double distance = face.normal.dot(l) - face.offset;  // < 0 behind the face
+      c.normal = R * face.normal;
+      c.point = R * (l - distance * face.normal) + pose.position;
+      c.depth = radius - distance;
+    }
+    face.depth = c.depth;
     faces.push_back(face);
-    if (!replaced) continue;
-    const double distance = face.normal.dot(l) - face.offset;  // < 0 behind the face
-    c.normal = R * face.normal;
-    c.point = R * (l - distance * face.normal) + pose.position;
-    c.depth = radius - distance;
   }
 }
 
 }  // namespace
 
 // --- line 3: detect hand collision and contact particles ---
-std::string World::Impl::detect_contacts() {
+std::string World::Impl::detect_contacts(double dt) {
   for (auto& entry : pairs) {
     entry.second.contacts.clear();
     entry.second.previous_faces.swap(entry.second.entry_faces);
@@ -240,7 +256,7 @@ std::string World::Impl::detect_contacts() {
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
       if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0, {}, {}}).first;
-      keep_entry_faces(h.state.tracked_positions, radius, b, h.history, it->second.previous_faces,
+      keep_entry_faces(h.state.tracked_positions, radius, b, h.history, dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
       touching += !it->second.contacts.empty();
