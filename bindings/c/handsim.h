@@ -29,9 +29,10 @@
 #include <stdint.h>
 
 /* ABI version: major << 16 | minor. The major changes when a struct layout or a function signature changes
- * (a host built against another major must not load this library); the minor when functions are added. */
+ * (a host built against another major must not load this library); the minor when functions are added or a
+ * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule). */
 #define HANDSIM_ABI_VERSION_MAJOR 1
-#define HANDSIM_ABI_VERSION_MINOR 0
+#define HANDSIM_ABI_VERSION_MINOR 1
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)

@@ -160,6 +160,10 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
   if (contacts.empty()) return;
   const Pose& pose = body.pose;
   const Mat3 R = pose.orientation.normalized().toRotationMatrix();
+  // The hand's motion relative to the body, once per pair: the hand's velocity estimate is a least-squares
+  // slope over its history, too dear to evaluate per contact (hundreds on a pinched lid).
+  const BodyVelocity hand_at_body = hand.attached_body_velocity(pose.position);
+  const Vec3 dv = hand_at_body.linear - body.linear, dw = hand_at_body.angular - body.angular;
   auto prev = previous.begin();
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
     while (prev != previous.end() && prev->particle < c.particle) ++prev;
@@ -169,8 +173,7 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
     EntryFace face{c.particle, R.transpose() * c.normal, 0};
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
     const bool touched_before = prev != previous.end() && prev->particle == c.particle;
-    const Vec3 relative = (hand.has_velocity() ? hand.point_velocity(x) : Vec3::Zero()) - body.linear -
-                          body.angular.cross(x - pose.position);
+    const Vec3 relative = dv + dw.cross(x - pose.position);
     // How much deeper the entry face may say a particle coming out on the far side is than last frame: as far
     // as it moved relative to the body in two frames (slack for the lag of the velocity estimate), plus a
     // radius. More and it did not cross the body this frame (an 18 cm base, knocked spinning under the

@@ -128,7 +128,7 @@ def test_gate_passes_a_candidate_only_if_it_is_no_worse_than_the_default(monkeyp
     rows = particles.gate({"sampling": "EVEN", "particles": 3000}, 0.0037, recordings="folder")
     assert [(g["sampling"], g["particles"], g["passes"]) for g in rows] == \
         [("RANDOM", 1182, True), ("EVEN", 3000, False), ("RANDOM", 3000, False)]
-    assert [g["radius_m"] for g in rows][1:] == [0.0037, 0.0037]
+    assert [g["radius_m"] for g in rows] == [particles.default_radius(), 0.0037, 0.0037]
     result = _result({"sampling": "EVEN", "particles": 3000}, default=("RANDOM", 1182))
     result.update(gate=rows, gate_recordings=True)
     text = particles.report(result)

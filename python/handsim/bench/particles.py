@@ -266,7 +266,7 @@ def gate(choice, radius, recordings):
         candidates += [(s, choice["particles"], radius) for s in ("EVEN", "RANDOM")]
     rows = []
     for sampling, n, r in dict.fromkeys(candidates):
-        rows.append({"sampling": sampling, "particles": n, "radius_m": r,
+        rows.append({"sampling": sampling, "particles": n, "radius_m": r or default_radius(),
                      **behaviour(n, handsim.ParticleSampling.__members__[sampling], r, recordings=recordings)})
     default = rows[0]
     for r in rows:
@@ -460,7 +460,7 @@ def _gate_section(result):
         out.append(f"| {g['sampling'].lower()} {g['particles']} | {g['radius_m'] * 1e3:.2f} | "
                    f"{g['base_push_m'] * 1e3:.1f} | {g['lid_slam_deg_s']:.0f} | {g['lid_final_deg']:.1f} | "
                    f"{missed if leap else 'not run'} | {'yes' if g['passes'] else '**no**'} |")
-    return out + ["", "The first row is the project default (radius 0 in `HandDef`: from its spacing). The gate's "
+    return out + ["", "The first row is the project default (`HandDef.particle_radius` 0: from its spacing). The gate's "
                   "checks are outcomes of contact-rich motion, which flip on small changes of the particle set "
                   "(docs/input.md, *Shortfalls*); the tests were written with the default hand, so it passes them "
                   "by construction, and a failing candidate shows that moving the default needs those scenes "
