@@ -69,6 +69,8 @@ def test_report_has_both_series_and_says_whether_the_default_came_from_the_study
     assert "The project default (3000 even)" in chosen and "The paper's (1182 random)" in chosen
     other = particles.report(_result({"sampling": "RANDOM", "particles": 1182}))
     assert "fit rule picks **random sampling, 1182 particles**" in other
+    paper = particles.report(_result({"sampling": "EVEN", "particles": 3000}, default=("RANDOM", 1182)))
+    assert paper.count("(1182 random) fits") == 1 and "The project default, the paper's (1182 random)" in paper
     assert "not backed by this run" in particles.report(_result(None))
     assert particles.table(_result({"sampling": "EVEN", "particles": 3000})).endswith(
         "chosen (fixed radius): EVEN 3000; project default: EVEN 3000")

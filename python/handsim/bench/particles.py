@@ -477,7 +477,10 @@ def _reading(result):
            f"- Fixed radius, pose fit within the tolerance: {', '.join(passing) or 'no row'}.",
            f"- Fixed radius, grasp decision over the tolerance: random at {_counts(bad['RANDOM'])}; even at "
            f"{_counts(bad['EVEN'])}. The grasp decision is not what separates the counts; the pose fit is."]
-    for label, key in (("The project default", tuple(result["project_default"])), ("The paper's", ("RANDOM", 1182))):
+    keys = {tuple(result["project_default"]): "The project default", ("RANDOM", 1182): "The paper's"}
+    if tuple(result["project_default"]) == ("RANDOM", 1182):
+        keys = {("RANDOM", 1182): "The project default, the paper's"}
+    for key, label in keys.items():
         for d in (r for r in fixed if (r["sampling"], r["particles"]) == key):
             out.append(f"- {label} ({d['particles']} {d['sampling'].lower()}) fits with |dv|/|v| = "
                        f"{d['fit_linear_rel_error']:.3f}, {d['fit_linear_rel_error'] / tol:.1f} x the tolerance, at "
