@@ -374,15 +374,16 @@ std::string World::Impl::decide_grasps(double dt) {
     if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, body_id(bi)});
     pair.previous_count = count;
     if (b.manipulable()) {
+      // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
+      // contacts (hundreds on a pinched lid) need no parts.
+      const double cos = def.grasp.cos_threshold;
+      const bool across = def.grasp.across_parts && !pair.tracker.grasped();
       directions.clear();
       parts.clear();
       for (const ParticleContact& c : pair.contacts) {
         directions.push_back(c.normal);
-        parts.push_back(rigid_part(*hands[hi].model, c.particle));
+        if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
       }
-      // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it.
-      const double cos = def.grasp.cos_threshold;
-      const bool across = def.grasp.across_parts && !pair.tracker.grasped();
       const bool opposing = count >= 2 && (across ? opposing_across_parts(directions, parts, cos)
                                                   : opposing_contacts(directions, cos));
       const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
