@@ -91,6 +91,17 @@ def _figure(path: Path, name: str, motion, runs):
     save_figure(fig, path, dpi=72)
 
 
+def replay_on_both_scenes(motion, name: str = "", hand_defs=None) -> list:
+    """(recording, summary, store) of `motion` replayed near the jewelry box and near the free cube, in the
+    order expectations() takes them; `hand_defs` as for replay.session_from_motion (default hands if None)."""
+    runs = []
+    for scene in ("jewelry_box", "free_box"):
+        rec = _replay.session_from_motion(motion, scene, hand_defs=hand_defs)
+        store = {}
+        runs.append((rec, _replay.run(rec, name, motion=motion, store=store), store))
+    return runs
+
+
 def run_all(assets: Path, img: Path = None) -> List[dict]:
     rows = []
     for path in sorted(assets.glob("*.json.lz")):
@@ -98,12 +109,7 @@ def run_all(assets: Path, img: Path = None) -> List[dict]:
         c0 = time.process_time()
         leap = load_leap_recording(path)
         motion = _replay.motion_from_leap(leap)
-        runs = []
-        for scene in ("jewelry_box", "free_box"):
-            rec = _replay.session_from_motion(motion, scene)
-            store = {}
-            summary = _replay.run(rec, name, motion=motion, store=store)
-            runs.append((rec, summary, store))
+        runs = replay_on_both_scenes(motion, name)
         if img is not None:
             _figure(img / f"input_{name}.png", name, motion, runs)
         checks = expectations(motion, runs[0][1], runs[1][1])

@@ -4,9 +4,9 @@ The paper kept 1,182 of its mesh's vertices as particles without saying why. For
 samplings (random, even) this measures, against the reference that uses every exposed vertex as a particle, in
 two series:
 
-- "fixed": every count, and the reference, use the particle radius of the default hand (HandDef's 3.7 mm, the
-  radius the paper's 1,182 random particles get from their spacing), so the error is the sampling alone; the
-  default count is chosen from this series.
+- "fixed": every count, and the reference, use the particle radius of the default hand (3.7 mm, the radius
+  the paper's 1,182 random particles get from their spacing), so the error is the sampling alone; the default
+  count is chosen from this series.
 - "spacing": the radius follows each count's own spacing (HandDef.particle_radius = 0), as a hand built with
   that count would have it; the reference then has its own, much smaller radius, so this series mixes the
   sphere size into the error (bigger spheres reach deeper and ask for a bigger push).
@@ -252,8 +252,8 @@ def _leap_misses(folder, hands):
     missed = {}
     for path in sorted(Path(folder).glob("*.json.lz")):
         motion = replay.motion_from_leap(load_leap_recording(path))
-        runs = [replay.run(replay.session_from_motion(motion, scene, hand_defs=hands)) for scene in ("jewelry_box", "free_box")]
-        checks = input_report.expectations(motion, *runs)
+        runs = input_report.replay_on_both_scenes(motion, hand_defs=hands)
+        checks = input_report.expectations(motion, runs[0][1], runs[1][1])
         missed[path.name.split(".")[0]] = sorted(k for k, ok in checks.items() if not ok)
     return missed
 
@@ -377,8 +377,8 @@ def report(result):
              "box over the presses. Step: median world.step of one press held still.", ""]
     lines += _series_section(result, "fixed", "## Fixed radius: the sampling alone", (
         f"Every count and the reference use the default hand's particle radius, "
-        f"**{result['default_radius_m'] * 1e3:.2f} mm** (read from `HandModel(HandDef())`; HandDef fixes it at the "
-        "radius the paper's 1,182 random particles get from their spacing). Only which skin points carry a "
+        f"**{result['default_radius_m'] * 1e3:.2f} mm** (read from `HandModel(HandDef())`: the radius the paper's "
+        "1,182 random particles get from their spacing). Only which skin points carry a "
         "sphere changes, so the error is what sampling costs. The default count is chosen from this table. "
         f"Random rows are the mean of {len(SEEDS)} draws (seeds {', '.join(map(str, SEEDS))}), the fit error's "
         "range over them in brackets."))
