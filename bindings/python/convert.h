@@ -61,7 +61,8 @@ T cast_arg(py::handle obj, const std::string& argument) {
 }
 
 // Builds a default T and assigns each keyword as an attribute, so `BodyDef(mass=2)` works for every def
-// struct and an unknown keyword is a TypeError naming it.
+// struct; an unknown keyword, or a value of the wrong type, is a TypeError naming the keyword (pybind11's own
+// message names only the setter's signature).
 template <class T>
 T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
   py::object obj = py::cast(T());
@@ -69,7 +70,14 @@ T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
     std::string key = py::str(item.first);
     if (!py::hasattr(obj, key.c_str()))
       throw py::type_error(std::string(type_name) + "() got an unexpected keyword argument '" + key + "'");
-    py::setattr(obj, key.c_str(), item.second);
+    try {
+      py::setattr(obj, key.c_str(), item.second);
+    } catch (const py::error_already_set& e) {
+      if (!e.matches(PyExc_TypeError)) throw;
+      throw py::type_error(std::string(type_name) + "." + key + ": cannot take " +
+                           std::string(py::repr(item.second)) + " (a " +
+                           std::string(py::str(py::type::of(item.second).attr("__name__"))) + ")");
+    }
   }
   return obj.cast<T>();
 }

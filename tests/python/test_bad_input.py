@@ -86,6 +86,10 @@ def rows(world, box, hand, frame, foreign):
          lambda: world.add_joint(handsim.HingeDef(parent=box.base, child=box.lid, axis_parent=[0, 0, 0])), err,
          "axis"),
         ("add_hand bad count", lambda: world.add_hand(handsim.HandDef(particle_count=-5)), err, "particle_count"),
+        ("grasp settings wrong type", lambda: handsim.GraspSettings(across_parts="yes"), TypeError,
+         "GraspSettings.across_parts"),
+        ("hand def wrong type", lambda: world.add_hand(handsim.HandDef(particle_count="many")), TypeError,
+         "HandDef.particle_count"),
         ("hand_particles foreign", lambda: world.hand_particles(handsim.HandId.unpack(12345 << 32)), stale, "hand"),
         ("body_contact_count foreign", lambda: world.body_contact_count(foreign, hand), stale, "body"),
         ("joint_state stale", lambda: world.joint_state(handsim.JointId.unpack((77 << 32) | 5)), stale, "joint"),
@@ -128,4 +132,4 @@ def test_bad_input_matrix(scene):
             pytest.fail(f"{name}: did not raise {exc.__name__}")
         assert world.state_hash() == before, f"{name}: the world changed"
         covered += 1
-    assert covered >= 49
+    assert covered >= 51
