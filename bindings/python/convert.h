@@ -61,8 +61,8 @@ T cast_arg(py::handle obj, const std::string& argument) {
 }
 
 // Builds a default T and assigns each keyword as an attribute, so `BodyDef(mass=2)` works for every def
-// struct; an unknown keyword, or a value of the wrong type, is a TypeError naming the keyword (pybind11's own
-// message names only the setter's signature).
+// struct; an unknown keyword, or a value of the wrong type, is a TypeError naming the keyword (pybind11's
+// generic message names only the setter's signature).
 template <class T>
 T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
   py::object obj = py::cast(T());
@@ -73,7 +73,10 @@ T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
     try {
       py::setattr(obj, key.c_str(), item.second);
     } catch (const py::error_already_set& e) {
-      if (!e.matches(PyExc_TypeError)) throw;
+      // Setters of our own already name the field; only pybind11's generic mismatch is rewritten.
+      if (!e.matches(PyExc_TypeError) || std::string(e.what()).find("incompatible function arguments") ==
+                                             std::string::npos)
+        throw;
       throw py::type_error(std::string(type_name) + "." + key + ": cannot take " +
                            std::string(py::repr(item.second)) + " (a " +
                            std::string(py::str(py::type::of(item.second).attr("__name__"))) + ")");
