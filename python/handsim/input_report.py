@@ -35,16 +35,24 @@ def expectations(motion: "_replay.Motion", jewelry: "_replay.Summary", free: "_r
 
     * always: every body pose finite; the hinge holds (violation <= 1e-6 m) and the lid stays within its
       0..90 deg limits;
-    * a recording with a closing hand (Leap grab or pinch strength >= 0.95): the cube is grasped at least once,
-      and not before the hand began to close;
+    * a recording with a closing hand (Leap grab or pinch strength >= 0.95): that hand grasps the cube, the
+      first time as it closes (not before it began to close, and not open: strength at least OPEN), and no hand
+      grasps the cube while open;
     * a recording without one: nothing is grasped, neither the cube (which the hand brushes) nor the lid."""
     out = {"finite": jewelry.finite and free.finite,
            "hinge holds": jewelry.max_hinge_violation_m <= HINGE_TOLERANCE_M,
            "lid within limits": -0.5 <= jewelry.max_lid_deg <= 90.5}
     start = _replay.closure_start(motion)
     if start is not None:
-        out["cube grasped"] = free.grasps.get("box", 0) >= 1
-        out["not before the closure"] = free.first_grasp_s is not None and free.first_grasp_s >= start
+        side = _replay.closing_hand(motion)[0]
+        frames = _replay.step_frames(motion)
+        grasps = [(int(frames[i]), hand) for i, body, hand in free.grasp_log if body == "box"]
+        own = [k for k, hand in grasps if hand == side]
+        out["cube grasped by the closing hand"] = bool(own)
+        out["as it closes"] = bool(own) and motion.times[own[0]] >= start and \
+            _replay.hand_strength(motion, side, own[0]) >= _replay.OPEN
+        out["no grasp by an open hand"] = all(_replay.hand_strength(motion, hand, k) >= _replay.OPEN
+                                              for k, hand in grasps)
     else:
         out["no grasp of the cube"] = not free.grasps
         out["no grasp of the lid"] = not jewelry.grasps

@@ -14,10 +14,13 @@ Scene ``free_box`` then puts a cube where the hand closes. The closing hand is t
 strength gets highest, if that reaches 0.95; at the first frame its strength reaches 0.5 (half closed) the cube's
 centre goes to the middle between the thumb and index tips, 1.6 cm cube (a pinch: its pinch strength is the
 larger one), or to the middle between the palm and the mean of the four fingertips, 4 cm cube (a grab). The
-cube is then lowered in 1 mm steps until the hand it is placed for, in every frame before it is a quarter closed
-(strength 0.25), clears it by 1 mm, so that only the closing hand reaches it: for a grab every particle of
-the simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules
-along its bones with the joint radii; the thumb is the anvil a pinch closes against and may rest at the cube).
+cube is then moved out of the palm (along the palm joint's normal, the way the fingers close) in 1 mm steps
+until the hand it is placed for clears it by 1 mm in every frame up to the last one it was open (strength
+below 0.05) before it closed, so that only the closing hand reaches it: for a grab the particles of the
+simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules along
+its bones with the joint radii). The thumb is the anvil either closes against and may rest at the cube (a grab
+leaves out the particles nearest its proximal, distal and tip joints). The rule also reports how deep the hand
+reaches into the cube's place while it is at least half closed.
 Without a closing hand the 4 cm cube goes under the first hand's mean palm, its top 1 cm above the lowest point any joint of
 that hand reaches, so the hand brushes it. The table top is moved to the cube's bottom.
 
@@ -50,8 +53,8 @@ HALF_CLOSED = 0.5
 BRUSH = 0.01
 PINCH_HALF = 0.008  # pinch: a 1.6 cm cube
 OPEN = 0.05        # a hand counts as open below this Leap strength
-QUARTER = 0.25     # the cube must clear the hand until it is this closed
 CLEAR = 0.001      # ... by this much
+THUMB_ANVIL = (_core.THUMB_PROXIMAL, _core.THUMB_DISTAL, _core.THUMB_TIP)
 HANDS = ("right", "left")
 
 
@@ -105,12 +108,14 @@ def closure_start(motion: Motion) -> Optional[float]:
     """Time (s from the motion's start) the closing hand's strength last rose from below OPEN before it first
     reached HALF_CLOSED; None without a closing hand."""
     c = closing_hand(motion)
-    if c is None:
-        return None
-    strength = c[2]
+    return None if c is None else float(motion.times[_closure_start_index(c[2])])
+
+
+def _closure_start_index(strength: np.ndarray) -> int:
+    """Index of the last frame the strength was below OPEN before it first reached HALF_CLOSED (0 if never)."""
     k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
     below = np.nonzero(np.nan_to_num(strength[:k], nan=0) < OPEN)[0]
-    return float(motion.times[below[-1]]) if len(below) else 0.0
+    return int(below[-1]) if len(below) else 0
 
 
 def placement(motion: Motion) -> np.ndarray:
@@ -150,9 +155,10 @@ def _bone_samples(frames, fingers=("thumb",) + _sk.FINGERS, per_bone=6):
     return np.concatenate(qs), np.concatenate(rs)
 
 
-def _particles(frames, hand_def):
+def _particles(frames, hand_def, skip=()):
     """Centres (M, 3) and radii (M,) of the simulated hand's particles in every one of `frames` (a World with
-    only that hand, skinned frame by frame): the volume the hand will occupy in the replay."""
+    only that hand, skinned frame by frame): the volume the hand will occupy in the replay. Particles whose
+    nearest joint is one of `skip` (joint indices) are left out."""
     world = _core.World(_core.WorldDef(ground=False, gravity=[0, 0, 0]))
     hand = world.add_hand(hand_def)
     radius = world.hand_model(hand).particle_radius
@@ -160,9 +166,21 @@ def _particles(frames, hand_def):
     for frame in frames:
         world.step(DT, [frame])
         if world.hand_tracked(hand):
-            points.append(np.asarray(world.hand_particles(hand)))
+            q = np.asarray(world.hand_particles(hand))
+            if skip:
+                joints = np.asarray(frame.positions)
+                nearest = np.argmin(np.linalg.norm(q[:, None] - joints[None], axis=2), axis=1)
+                q = q[~np.isin(nearest, skip)]
+            points.append(q)
     q = np.concatenate(points) if points else np.zeros((0, 3))
     return q, np.full(len(q), radius)
+
+
+def _gaps(q, r, centre, half):
+    """Signed distance (m) from each sphere (centres q, radii r) to an axis-aligned cube; negative: it
+    overlaps by that much."""
+    d = np.abs(q - centre) - half
+    return np.linalg.norm(np.maximum(d, 0), axis=1) + np.minimum(d.max(axis=1), 0) - r
 
 
 def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict, str):
@@ -170,42 +188,11 @@ def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict,
     h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
     closing = closing_hand(motion)
     if closing is not None:
-        side, kind, strength = closing
-        pinch = kind == "pinch"
+        side = closing[0]
         hand_def = next((d for d in (hand_defs or []) if d.handedness.name.lower() == side),
                         _core.HandDef(handedness=_core.Handedness.RIGHT if side == "right" else _core.Handedness.LEFT))
-        k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
-        frame = motion.frames[k][side].frame
-        p = np.asarray(frame.positions)
-        if pinch:
-            h = PINCH_HALF
-            centre = 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
-            where = "between the thumb and index tips"
-        else:
-            tips = p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0)
-            centre = 0.5 * (p[_core.PALM] + tips)
-            where = "between the palm and the fingertips"
-        # the hand must not touch the cube before it closes: lower the cube 1 mm at a time until the hand's
-        # particles clear it in every frame before k0, where the strength first reaches QUARTER
-        k0 = int(np.argmax(np.nan_to_num(strength, nan=-1) >= QUARTER))
-        before = [fr[side].frame for fr in motion.frames[:k0] if side in fr]
-        # a grab: no particle of the simulated hand may touch the cube early; a pinch: the index finger may not
-        # (the thumb is the anvil a pinch closes against: it may rest at the cube)
-        q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def)
-        near = (np.abs(q[:, [0, 2]] - centre[[0, 2]]) < h + r[:, None] + CLEAR).all(axis=1)
-        q, r = q[near], r[near]
-        top = centre[1] + h
-        for _ in range(200):
-            c = np.array([centre[0], top - h, centre[2]])
-            if not (np.linalg.norm(np.maximum(np.abs(q - c) - h, 0), axis=1) - r < CLEAR).any():
-                break
-            top -= 1e-3
-        lowered = centre[1] + h - top
-        centre = centre - [0, lowered, 0] + shift
-        if lowered > 0:
-            where += f", lowered {lowered * 1000:.0f} mm to clear the opening hand"
-        rule = (f"{'pinch' if pinch else 'grab'} of the {side} hand half closed at t={motion.times[k]:.2f} s "
-                f"(frame {k}): {2 * h * 100:.1f} cm cube {where}")
+        centre, h, rule = _cube_for_closing_hand(motion, closing, hand_def)
+        centre = centre + shift
         return {"position": [float(centre[0]), float(centre[1] - h), float(centre[2])], "half_extent": h}, rule
     side = next(s for s in HANDS if any(s in f for f in motion.frames))
     palms = motion.palms(side) + shift
@@ -215,6 +202,64 @@ def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict,
     top = lowest + BRUSH
     return ({"position": [float(centre[0]), float(top - 2 * h), float(centre[2])]},
             f"no closing hand: cube under the {side} hand's mean palm, top {BRUSH * 100:.0f} cm above its lowest joint")
+
+
+def _cube_for_closing_hand(motion: Motion, closing, hand_def) -> (np.ndarray, float, str):
+    """Centre (motion coordinates), half extent and description of the cube the closing hand is to grasp."""
+    side, kind, strength = closing
+    pinch = kind == "pinch"
+    k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
+    frame = motion.frames[k][side].frame
+    p = np.asarray(frame.positions)
+    if pinch:
+        h = PINCH_HALF
+        centre = 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
+        where = "between the thumb and index tips"
+    else:
+        h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
+        tips = p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0)
+        centre = 0.5 * (p[_core.PALM] + tips)
+        where = "between the palm and the fingertips"
+    # the hand must not touch the cube before it closes: move the cube 1 mm at a time until the hand clears
+    # it in every frame up to k0, the last one it was open before it closed
+    k0 = _closure_start_index(strength)
+    before = [fr[side].frame for fr in motion.frames[:k0 + 1] if side in fr]
+    # a grab: no particle of the simulated hand but the thumb's may touch the cube early; a pinch: the index
+    # finger may not. The thumb is the anvil either closes against: it may rest at the cube.
+    q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def, THUMB_ANVIL)
+    # out of the palm (along its normal, OpenXR's -Y of the palm joint): the way the fingers close, so the
+    # closing hand still sweeps through the cube whichever way the palm faces
+    out = -_sk.quat_matrix(np.asarray(frame.orientations)[_core.PALM])[:, 1]
+    moved = 0
+    while moved < 200 and (_gaps(q, r, centre + moved * 1e-3 * out, h) < CLEAR).any():
+        moved += 1
+    centre = centre + moved * 1e-3 * out
+    if moved > 0:
+        where += f", moved {moved} mm out of the palm to clear the opening hand"
+    # how deep the closing hand (all of it) goes where the cube starts, until it is less than half closed
+    # again: a hand that barely reaches it cannot be expected to grasp it
+    opened = np.nonzero(np.nan_to_num(strength[k:], nan=0) < HALF_CLOSED)[0]
+    end = k + (int(opened[0]) if len(opened) else len(strength) - k)
+    q, r = _particles([fr[side].frame for fr in motion.frames[k0 + 1:end] if side in fr], hand_def)
+    if len(q):
+        where += f"; the closing hand reaches {-1000 * _gaps(q, r, centre, h).min():.0f} mm into it"
+    rule = (f"{kind} of the {side} hand half closed at t={motion.times[k]:.2f} s (frame {k}): "
+            f"{2 * h * 100:.1f} cm cube {where}")
+    return centre, h, rule
+
+
+def step_frames(motion: Motion, dt: float = DT) -> np.ndarray:
+    """For every step of a replay at `dt`, the index of the motion frame it takes: the newest at or before the
+    step's start."""
+    n = int(math.floor(motion.times[-1] / dt + 1e-9)) + 1
+    return np.searchsorted(motion.times, np.arange(n) * dt + 1e-12, side="right") - 1
+
+
+def hand_strength(motion: Motion, side: str, frame: int) -> float:
+    """Leap's grab or pinch strength of one hand in one frame, whichever is larger; 0 where it has none."""
+    col = HANDS.index(side)
+    values = [a[frame, col] for a in (motion.grab, motion.pinch) if a is not None]
+    return float(np.nanmax(values)) if values and not np.all(np.isnan(values)) else 0.0
 
 
 def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: Sequence = None,
@@ -229,8 +274,8 @@ def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: S
     elif scene != "jewelry_box":
         raise ValueError(f"scene: expected 'jewelry_box' or 'free_box' for tracker input, got {scene!r}")
     pose = np.array([*shift, 0, 0, 0, 1.0])
-    n = int(math.floor(motion.times[-1] / dt + 1e-9)) + 1
-    index = np.searchsorted(motion.times, np.arange(n) * dt + 1e-12, side="right") - 1
+    index = step_frames(motion, dt)
+    n = len(index)
     J = _core.JOINT_COUNT
     H = len(hand_defs)
     present = np.ones((n, H), bool)
@@ -278,6 +323,8 @@ class Summary:
     hash_matches: Optional[bool]
     final_hash: int
     first_grasp_s: Optional[float] = None  # time of the first GRASP_BEGIN
+    # every GRASP_BEGIN as (step index, object, "right" or "left"): who grasped what, and with which input frame
+    grasp_log: List[tuple] = dataclasses.field(default_factory=list)
 
 
     def lines(self) -> List[str]:
@@ -306,7 +353,7 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
     trace = {"t": [], "lid": [], "lift": [], "grasped": []}
     snaps = []
     state = {"finite": True, "viol": 0.0, "lid": -1e9, "lift": 0.0, "shift": 0.0, "start": None}
-    counts = {"grasps": {}, "contacts": {}, "drops": 0, "releases": 0, "held": {}, "first": None}
+    counts = {"grasps": {}, "contacts": {}, "drops": 0, "releases": 0, "held": {}, "first": None, "log": []}
     n_total = rec.steps if steps is None else min(steps, rec.steps)
     keys = set(np.linspace(0, n_total - 1, 4).round().astype(int).tolist())
 
@@ -322,6 +369,7 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
             label = names.get(e.body, "?")
             if e.type == _core.EventType.GRASP_BEGIN:
                 counts["grasps"][label] = counts["grasps"].get(label, 0) + 1
+                counts["log"].append((i, label, world.hand_model(e.hand).handedness.name.lower()))
                 if counts["first"] is None:
                     counts["first"] = world.time
             elif e.type == _core.EventType.CONTACT_BEGIN:
@@ -360,7 +408,7 @@ def run(rec: _rec.Recording, name: str = "", picture: Optional[Path] = None, ste
                       state["lid"] if jewelry else None, state["viol"] if jewelry else None,
                       state["lift"] if rec.scene == "free_box" else None,
                       state["shift"] if rec.scene == "free_box" else None,
-                      None if rec.hashes is None else result.matches, result.final_hash, counts["first"])
+                      None if rec.hashes is None else result.matches, result.final_hash, counts["first"], counts["log"])
     if picture is not None:
         _picture(picture, rec, summary, snaps, trace, motion)
     if store is not None:
