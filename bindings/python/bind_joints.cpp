@@ -254,8 +254,9 @@ void bind_scenes(py::module_& m) {
       .def_readwrite("lower", &JewelryBoxDef::lower)
       .def_readwrite("upper", &JewelryBoxDef::upper)
       .def_readwrite("damping", &JewelryBoxDef::damping)
-      .def_readwrite("friction", &JewelryBoxDef::friction)
-      .def_readwrite("table", &JewelryBoxDef::table);
+      .def_readwrite("friction", &JewelryBoxDef::friction);
+  flag_property(def, "table", &JewelryBoxDef::table, "JewelryBoxDef.table",
+                "a static table (1.2 x 0.75 x 0.8 m) under the box; its top is at position.y");
   enum_property(def, "model", &JewelryBoxDef::model, "jewelry_box.model");
   enum_property(def, "solver", &JewelryBoxDef::solver, "jewelry_box.solver");
 

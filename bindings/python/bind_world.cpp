@@ -85,16 +85,16 @@ void bind_shapes(py::module_& m) {
 void bind_defs(py::module_& m) {
   m.attr("OPPOSING_COS") = kOpposingCos;
   m.attr("PAPER_LITERAL_COS") = kPaperLiteralCos;
-  py::class_<GraspSettings>(m, "GraspSettings", "Grasp decision (eq. 3), hysteresis, release and tracking grace.")
-      .def(py::init([](py::kwargs kw) { return from_kwargs<GraspSettings>(kw, "GraspSettings"); }))
+  py::class_<GraspSettings> gs(m, "GraspSettings", "Grasp decision (eq. 3), hysteresis, release and tracking grace.");
+  gs.def(py::init([](py::kwargs kw) { return from_kwargs<GraspSettings>(kw, "GraspSettings"); }))
       .def_readwrite("cos_threshold", &GraspSettings::cos_threshold)
-      .def_readwrite("across_parts", &GraspSettings::across_parts,
-                     "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)")
       .def_readwrite("frames_to_grasp", &GraspSettings::frames_to_grasp)
       .def_readwrite("frames_to_release", &GraspSettings::frames_to_release)
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
       .def_readwrite("velocity_window", &GraspSettings::velocity_window);
+  flag_property(gs, "across_parts", &GraspSettings::across_parts, "GraspSettings.across_parts",
+                "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)");
   py::enum_<WorldDef::ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.")
       .value("CLOSED_FORM", WorldDef::ParticleContacts::ClosedForm)
       .value("BULLET_OBJECTS", WorldDef::ParticleContacts::BulletObjects);
@@ -103,16 +103,16 @@ void bind_defs(py::module_& m) {
   wd.def(py::init([](py::kwargs kw) { return from_kwargs<WorldDef>(kw, "WorldDef"); }))
       .def_readwrite("fixed_substep", &WorldDef::fixed_substep)
       .def_readwrite("max_substeps", &WorldDef::max_substeps)
-      .def_readwrite("ground", &WorldDef::ground)
       .def_readwrite("ground_height", &WorldDef::ground_height)
       .def_readwrite("ground_friction", &WorldDef::ground_friction)
       .def_readwrite("grasp", &WorldDef::grasp)
       .def_readwrite("particle_contacts", &WorldDef::particle_contacts)
-      .def_readwrite("paper_pipeline", &WorldDef::paper_pipeline,
-                     "the paper's pipeline as a baseline: no culling, render skinning every step, Ceres LM")
       .def_readwrite("render_threads", &WorldDef::render_threads,
                      "threads skinning the render mesh on read; bit-identical to one thread");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
+  flag_property(wd, "ground", &WorldDef::ground, "WorldDef.ground");
+  flag_property(wd, "paper_pipeline", &WorldDef::paper_pipeline, "WorldDef.paper_pipeline",
+                "the paper's pipeline as a baseline: no culling, render skinning every step, Ceres LM");
 
   py::class_<BodyDef> bd(m, "BodyDef", "What to create: shape, mass (0 = static), pose, material.");
   bd.def(py::init([](py::kwargs kw) { return from_kwargs<BodyDef>(kw, "BodyDef"); }))
@@ -122,8 +122,9 @@ void bind_defs(py::module_& m) {
           "pose", [](const BodyDef& d) { return from_pose(d.pose); },
           [](BodyDef& d, py::handle v) { d.pose = to_pose(v, "body.pose"); })
       .def_readwrite("friction", &BodyDef::friction)
-      .def_readwrite("restitution", &BodyDef::restitution)
-      .def_readwrite("kinematic", &BodyDef::kinematic);
+      .def_readwrite("restitution", &BodyDef::restitution);
+  flag_property(bd, "kinematic", &BodyDef::kinematic, "BodyDef.kinematic",
+                "moved only by set_body_pose / the hand, never by forces");
   HS_VEC3_PROPERTY(bd, BodyDef, linear_velocity, "body.linear_velocity");
   HS_VEC3_PROPERTY(bd, BodyDef, angular_velocity, "body.angular_velocity");
 

@@ -13,6 +13,13 @@ Array as_array(py::handle obj, const std::string& argument) {
   return a;
 }
 
+bool to_flag(py::handle obj, const std::string& argument) {
+  if (PyBool_Check(obj.ptr())) return obj.ptr() == Py_True;
+  if (py::isinstance(obj, py::module_::import("numpy").attr("bool_"))) return obj.cast<bool>();
+  throw py::type_error(argument + ": expected True or False, got " +
+                       std::string(py::str(py::type::of(obj).attr("__name__"))));
+}
+
 IntArray as_int_array(py::handle obj, const std::string& argument) {
   auto type_name = [&] { return std::string(py::str(py::type::of(obj).attr("__name__"))); };
   if (obj.is_none() || py::isinstance<py::str>(obj))

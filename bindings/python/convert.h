@@ -60,6 +60,18 @@ T cast_arg(py::handle obj, const std::string& argument) {
   return obj.cast<T>();
 }
 
+// Python lets None, 0 or "" stand for a bool; a flag set to any of them is a mistake worth naming, so flags
+// take exactly True or False (a numpy bool too): "BodyDef.kinematic: expected True or False, got NoneType".
+bool to_flag(py::handle obj, const std::string& argument);
+
+template <class T>
+void flag_property(py::class_<T>& cls, const char* name, bool T::*field, const std::string& argument,
+                   const char* doc = "") {
+  cls.def_property(
+      name, [field](const T& self) { return self.*field; },
+      [field, argument](T& self, py::handle v) { self.*field = to_flag(v, argument); }, doc);
+}
+
 // Builds a default T and assigns each keyword as an attribute, so `BodyDef(mass=2)` works for every def
 // struct; an unknown keyword, or a value of the wrong type, is a TypeError naming the keyword (pybind11's
 // generic message names only the setter's signature).
