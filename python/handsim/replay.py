@@ -327,10 +327,17 @@ class Summary:
     grasp_log: List[tuple] = dataclasses.field(default_factory=list)
 
 
+    def _grasps_by_hand(self) -> Dict[str, int]:
+        out = {}
+        for _, _, hand in self.grasp_log:
+            out[hand] = out.get(hand, 0) + 1
+        return out
+
     def lines(self) -> List[str]:
         out = [f"{self.name} on {self.scene}: {self.steps} steps, {self.duration_s:.2f} s",
                f"  grasps: {self.grasps or 'none'}"
                + (f" (first at {self.first_grasp_s:.2f} s)" if self.first_grasp_s is not None else "")
+               + "".join(f"; {hand} hand {n}" for hand, n in self._grasps_by_hand().items())
                + f"; held s: { {k: round(v, 2) for k, v in self.held_s.items()} or 'none'}",
                f"  grasp ends: {self.releases} released, {self.drops} dropped (tracking lost)",
                f"  contacts begun: {self.contacts or 'none'}",

@@ -560,6 +560,7 @@ def test_the_cube_goes_where_the_hand_closes_whichever_way_the_palm_faces(palm_q
     jewelry = replay.run(replay.session_from_motion(motion, "jewelry_box"))
     free = replay.run(replay.session_from_motion(motion, "free_box"))
     assert free.grasp_log and all(hand == "right" for _, _, hand in free.grasp_log)
+    assert f"right hand {len(free.grasp_log)}" in free.lines()[1]  # the summary says who grasped
     checks = input_report.expectations(motion, jewelry, free)
     assert all(checks.values()), checks
 
