@@ -8,6 +8,7 @@ both scenes and a timeline) and rewrites the table between the ``<!-- results --
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import sys
 import time
@@ -16,10 +17,11 @@ from typing import Dict, List
 
 import numpy as np
 
+from . import _core
 from . import render as _render
 from . import replay as _replay
 from .plots import save_figure
-from .adapters.leap import load_leap_recording
+from .adapters.leap import read_leap_document, read_leap_json, without_skeleton
 
 BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
 HINGE_TOLERANCE_M = 1e-6
@@ -110,19 +112,52 @@ def replay_on_both_scenes(motion, name: str = "", hand_defs=None) -> list:
     return runs
 
 
+def rebuild_error(doc: dict, name: str = "recording") -> dict:
+    """How far the hands of a formatVersion 0.1/1 document land from their skeleton when the adapter gets them
+    as a Leap SDK before 2.0 sent them (adapters.leap.without_skeleton): the share of hands given the right
+    side, the largest palm joint distance and each fingertip's median distance (mm), over every hand of
+    every frame."""
+    ref, bare = read_leap_json(doc, name), read_leap_json(without_skeleton(doc), name)
+    tips = [_core.THUMB_TIP, _core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]
+    right, palm, dist = [], [], []
+    for a, b in zip(ref.frames, bare.frames):
+        for side, fa in a.items():
+            right.append(side in b)
+            if side in b:
+                pa, pb = np.asarray(fa.frame.positions), np.asarray(b[side].frame.positions)
+                palm.append(np.linalg.norm(pa[_core.PALM] - pb[_core.PALM]))
+                dist.append(np.linalg.norm(pa[tips] - pb[tips], axis=1))
+    return {"hands": len(right), "side_right": float(np.mean(right)), "palm_max_mm": 1000 * float(np.max(palm)),
+            "tip_median_mm": (1000 * np.median(dist, axis=0)).tolist()}
+
+
+def strength_agreement(motion: "_replay.Motion") -> dict:
+    """The closing hand and closure start (replay's rules) from Leap's strengths and from the skeleton's
+    (replay.with_strengths on the motion without Leap's): what a tracker without strengths would get."""
+    bare = _replay.with_strengths(dataclasses.replace(motion, grab=None, pinch=None))
+    out = {}
+    for key, m in (("leap", motion), ("skeleton", bare)):
+        c = _replay.closing_hand(m)
+        out[key] = None if c is None else (c[0], c[1], _replay.closure_start(m))
+    return out
+
+
 def run_all(assets: Path, img: Path = None) -> List[dict]:
     rows = []
     for path in sorted(assets.glob("*.json.lz")):
         name = path.name.split(".")[0]
         c0 = time.process_time()
-        leap = load_leap_recording(path)
+        doc = read_leap_document(path)
+        leap = read_leap_json(doc, name)
         motion = _replay.motion_from_leap(leap)
         runs = replay_on_both_scenes(motion, name)
         if img is not None:
             _figure(img / f"input_{name}.png", name, motion, runs)
         checks = expectations(motion, runs[0][1], runs[1][1])
+        rebuilt = rebuild_error(doc, name) if leap.format_version != 2 else None
         rows.append({"name": name, "leap": leap, "motion": motion, "jewelry": runs[0][1], "free": runs[1][1],
-                     "placement": runs[1][0].info["placement"], "checks": checks,
+                     "placement": runs[1][0].info["placement"], "checks": checks, "rebuilt": rebuilt,
+                     "strengths": strength_agreement(motion),
                      "cpu_s": time.process_time() - c0})
     return rows
 
@@ -134,6 +169,7 @@ def table(rows) -> str:
     for r in rows:
         leap, j, f = r["leap"], r["jewelry"], r["free"]
         hands = ", ".join(f"{k}:{v}" for k, v in sorted(leap.hand_counts().items()))
+        hands += "".join(f"; {case}: {n}" for case, n in sorted(leap.notes.items()))  # what the adapter made up
         gp = " / ".join(f"{np.nanmax(a):.2f}" if not np.all(np.isnan(a)) else "–" for a in (leap.grab, leap.pinch))
         jg = ", ".join(f"{k} {v}" for k, v in sorted(j.grasps.items())) or "none"
         fg = (f"{f.grasps.get('box', 0)} ({f.first_grasp_s:.2f} s)" if f.grasps else "none")
@@ -143,6 +179,19 @@ def table(rows) -> str:
         out.append(f"| {r['name']} | {leap.format_version} | {len(leap.frames)} | {leap.times[-1]:.2f} | {hands} | "
                    f"{gp} | {jg}; {j.max_lid_deg:.1f}°; {j.max_hinge_violation_m:.1e} m | {r['placement']} | "
                    f"{fg}; {held:.2f} s; {f.max_lift_m * 1000:.0f} mm | {verdict} |")
+    return "\n".join(out)
+
+
+def rebuild_table(rows) -> str:
+    out = ["| recording | hands | right side | palm joint max | fingertip median: thumb, index, middle, ring, little "
+           "| closing hand, closure start: Leap's strengths / the skeleton's |", "|---|---:|---:|---:|---|---|"]
+    say = lambda c: "none" if c is None else f"{c[0]} {c[1]} {c[2]:.2f} s"
+    for r in rows:
+        e, g = r["rebuilt"], r["strengths"]
+        cells = ["–"] * 4 if e is None else [
+            str(e["hands"]), f"{100 * e['side_right']:.1f} %", f"{e['palm_max_mm']:.1f} mm",
+            ", ".join(f"{v:.0f}" for v in e["tip_median_mm"]) + " mm"]
+        out.append(f"| {r['name']} | " + " | ".join(cells) + f" | {say(g['leap'])} / {say(g['skeleton'])} |")
     return "\n".join(out)
 
 
@@ -158,6 +207,10 @@ def main(argv=None) -> int:
     c0 = time.perf_counter()
     rows = run_all(args.assets, args.img)
     text = table(rows) + "\n\nPictures: " + ", ".join(f"[{r['name']}](img/input_{r['name']}.png)" for r in rows)
+    text += ("\n\nThe same hands as a Leap SDK before 2.0 sent them (`adapters.leap.without_skeleton`: no types, "
+             "bone joints or strengths, no curled fingers), rebuilt from the palm, against the skeleton's joints; "
+             "and the closing hand from Leap's strengths and from the skeleton's (`replay.with_strengths`; a "
+             "formatVersion 2 file is not stripped):\n\n" + rebuild_table(rows))
     text += (f"\n\n{len(rows)} recordings, {sum(len(r['checks']) for r in rows)} checks, "
              f"{sum(not ok for r in rows for ok in r['checks'].values())} not met; "
              f"{time.perf_counter() - c0:.0f} s wall for the whole run.")

@@ -81,7 +81,30 @@ class Motion:
 
 
 def motion_from_leap(leap) -> Motion:
-    return Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap")
+    return with_strengths(Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap"))
+
+
+def with_strengths(motion: Motion) -> Motion:
+    """`motion` with grab and pinch strengths from the skeleton (:func:`skeleton.closure_strengths`) for each
+    hand the tracker gave none for (BVH, Leap before 2.0), so that the closing hand and the expectations of a
+    replay do not depend on which tracker recorded it; its source then says so."""
+    n = len(motion.frames)
+    grab = np.full((n, 2), np.nan) if motion.grab is None else np.array(motion.grab, float)
+    pinch = np.full((n, 2), np.nan) if motion.pinch is None else np.array(motion.pinch, float)
+    derived = []
+    for col, side in enumerate(HANDS):
+        if not (np.all(np.isnan(grab[:, col])) and np.all(np.isnan(pinch[:, col]))):
+            continue
+        seen = [i for i, f in enumerate(motion.frames) if side in f and f[side].frame.tracked]
+        for i in seen:
+            grab[i, col], pinch[i, col] = _sk.closure_strengths(motion.frames[i][side].frame)
+        if seen:
+            derived.append(side)
+    if not derived:
+        return motion
+    return dataclasses.replace(motion, grab=grab, pinch=pinch,
+                               source=f"{motion.source} (grab and pinch of the {' and '.join(derived)} hand "
+                                      f"from the skeleton)")
 
 
 def closing_hand(motion: Motion):

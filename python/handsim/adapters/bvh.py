@@ -261,7 +261,7 @@ def load_bvh(path) -> Bvh:
 
 def load_bvh_motion(path, scale: float = 0.01):
     """A :class:`handsim.replay.Motion` with every hand the BVH file has (Perception Neuron names)."""
-    from ..replay import Motion
+    from ..replay import Motion, with_strengths
     bvh = load_bvh(path)
     hands = {}
     for side, h in (("right", _core.Handedness.RIGHT), ("left", _core.Handedness.LEFT)):
@@ -271,7 +271,7 @@ def load_bvh_motion(path, scale: float = 0.01):
         raise ValueError(f"path ({Path(path).name}): no RightHand or LeftHand joint")
     n = bvh.motion.shape[0]
     frames = [{side: seq[i] for side, seq in hands.items()} for i in range(n)]
-    return Motion(Path(path).name.split(".")[0], np.arange(n) * bvh.frame_time, frames, source="bvh")
+    return with_strengths(Motion(Path(path).name.split(".")[0], np.arange(n) * bvh.frame_time, frames, source="bvh"))
 
 
 # ---------------------------------------------------------------------------------------------------------

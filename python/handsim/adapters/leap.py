@@ -25,10 +25,30 @@ metacarpal is 1.4475 times as long as the middle proximal bone and points along
 0.9885 ``direction`` + 0.1483 ``palmNormal`` ± 0.0295 (``direction`` x ``palmNormal``) (+ for a right hand);
 the other metacarpal bases follow from the wrist by the 15 % rule. Those joints are reported as synthesized.
 Joint orientations are built from the positions (:func:`handsim.adapters.skeleton.orientations`).
+
+What a real recording may lack is not an error (``LeapRecording.notes`` counts each case):
+
+* a hand without ``type`` (Leap SDKs before 2.0 did not tell left from right) takes the side its thumb is on
+  when the thumb is typed and has a skeleton (a right thumb lies on +(``direction`` x ``palmNormal``)), else
+  the side it had earlier in the recording (hand ids persist while a hand is tracked), else the side of the
+  device it is on (x < 0: left); two hands of a frame never get the same side;
+* a hand whose five fingers do not all have ``mcp/pip/dip`` (no skeleton, or fingers Leap lost) is rebuilt
+  from its palm: handsim's synthetic hand (:func:`handsim.make_hand_frame`) with its palm joint where Leap's
+  palm puts OpenXR's (``palmPosition`` + the measured offset), each finger Leap reports curled as far as the
+  angle of its ``direction`` from the flat hand's says (the thumb also swung across the palm as far as its
+  direction says), and each finger it does not report curled by its grab strength, or without one as far as
+  the other fingers it reports (fully when it reports none: Leap drops the fingers it cannot see). Untyped
+  pointables go to the fingers by the least total distance between their tips and the synthetic hand's,
+  each finger curled as its pointable's direction says. Every joint of such a hand is synthesized;
+* a hand without ``palmPosition``, ``direction`` or ``palmNormal`` that cannot use its skeleton is untracked in
+  that frame; tools and pointables of no listed hand are ignored; a frame whose timestamp goes back is
+  dropped; a second hand of a side keeps the first one the tracker listed.
 """
 from __future__ import annotations
 
+import collections
 import dataclasses
+import itertools
 import json
 import math
 from pathlib import Path
@@ -44,6 +64,8 @@ MM = 0.001
 TIP_EXTENSION = 1.2987
 MIDDLE_METACARPAL_PER_PROXIMAL = 1.4475
 METACARPAL_DIRECTION = (0.9885, 0.1483, 0.0295)  # in (direction, palmNormal, direction x palmNormal), right hand
+PALM_OFFSET_MM = (-9.0783, -9.1987, 1.9203)  # OpenXR palm - Leap palmPosition, same axes, right hand
+MATCH_MM = 80.0  # an untyped pointable further than this from every flat fingertip is not matched
 SUPPORTED_FORMATS = (0.1, 1, 2)
 _J = skeleton.JOINT
 _LEAP_FINGERS = ("thumb", "index", "middle", "ring", "little")
@@ -63,6 +85,8 @@ class LeapRecording:
     grab: np.ndarray
     pinch: np.ndarray
     confidence: np.ndarray
+    # what the recording lacked and how it was made up: {case: number of hands (or frames) it applied to}
+    notes: Dict[str, int] = dataclasses.field(default_factory=dict)
 
     @property
     def format_version(self):
@@ -86,25 +110,74 @@ def _vec(obj, key, where):
     return a
 
 
-def leap_hand_frame(hand: dict, fingers: Dict[int, dict], where: str = "hand") -> skeleton.AdaptedFrame:
-    """One Leap hand (a frame's ``hands[i]`` object) and its five pointables keyed by finger type 0..4 as an
-    AdaptedFrame in metres."""
-    kind = hand.get("type")
+def _palm_axes(hand: dict, where: str):
+    """Unit (direction, palmNormal, direction x palmNormal) of a Leap hand, the normal made orthogonal to the
+    direction; None when either is missing or degenerate."""
+    d, n = _vec(hand, "direction", where), _vec(hand, "palmNormal", where)
+    if d is None or n is None or np.linalg.norm(d) < 1e-6:
+        return None
+    d = d / np.linalg.norm(d)
+    n = n - (n @ d) * d
+    if np.linalg.norm(n) < 1e-6:
+        return None
+    n = n / np.linalg.norm(n)
+    return d, n, np.cross(d, n)
+
+
+def _typed_fingers(pointables) -> Dict[int, dict]:
+    """{finger type 0..4: pointable} of the pointables that say their type (the first of each type)."""
+    out = {}
+    for p in pointables:
+        t = p.get("type")
+        if isinstance(t, (int, float)) and int(t) == t and 0 <= t < 5 and int(t) not in out:
+            out[int(t)] = p
+    return out
+
+
+def thumb_side(hand: dict, pointables, where: str = "hand") -> Optional[str]:
+    """"right" or "left" from where the thumb is (a right thumb lies on +(direction x palmNormal) of the palm:
+    19.8 mm or more in every right-hand frame of the development recordings, -41 mm or less in every left-hand
+    one); None without a typed thumb with a pipPosition and the palm's axes."""
+    thumb = _typed_fingers(pointables).get(0)
+    axes, palm = _palm_axes(hand, where), _vec(hand, "palmPosition", where)
+    pip = None if thumb is None else _vec(thumb, "pipPosition", f"{where}.pointables[type 0]")
+    if axes is None or palm is None or pip is None:
+        return None
+    return "right" if (pip - palm) @ axes[2] > 0 else "left"
+
+
+_SKELETON_KEYS = ("mcpPosition", "pipPosition", "dipPosition")
+
+
+def leap_hand_frame(hand: dict, pointables, where: str = "hand", side: Optional[str] = None):
+    """One Leap hand (a frame's ``hands[i]`` object) and its pointables (a list, or a dict of them by finger
+    type) as (AdaptedFrame in metres, "skeleton" or "palm"), or (None, reason) when the hand cannot be placed.
+    `side` ("right"/"left") overrides the hand's ``type``; without either the thumb tells it."""
+    pointables = list(pointables.values()) if isinstance(pointables, dict) else list(pointables)
+    kind = side or hand.get("type")
+    if kind is None:
+        kind = thumb_side(hand, pointables, where)
+        if kind is None:
+            return None, "untracked: no side (no type, no typed thumb)"
     if kind not in ("left", "right"):
         raise ValueError(f"{where}.type: expected 'left' or 'right', got {kind!r}")
     handedness = _core.Handedness.RIGHT if kind == "right" else _core.Handedness.LEFT
-    missing = [t for t in range(5) if t not in fingers]
-    if missing:
-        raise ValueError(f"{where}: pointables of finger types {missing} are missing")
+    fingers = _typed_fingers(pointables)
+    if len(fingers) == 5 and all(fingers[t].get(k) is not None for t in range(5) for k in _SKELETON_KEYS):
+        return _skeleton_frame(hand, fingers, handedness, where), "skeleton"
+    frame = _palm_frame(hand, pointables, fingers, handedness, where)
+    return (frame, "palm") if frame is not None else (None, "untracked: no palm pose")
+
+
+def _skeleton_frame(hand: dict, fingers: Dict[int, dict], handedness, where: str) -> skeleton.AdaptedFrame:
+    """The hand from Leap's bone joints (every finger has mcp/pip/dip)."""
     pos = np.full((_core.JOINT_COUNT, 3), np.nan)
     given = np.zeros(_core.JOINT_COUNT, bool)
     synthesized = []
     for t, name in enumerate(_LEAP_FINGERS):
         p = fingers[t]
         w = f"{where}.pointables[type {t}]"
-        mcp, pip, dip = (_vec(p, k, w) for k in ("mcpPosition", "pipPosition", "dipPosition"))
-        if mcp is None or pip is None or dip is None:
-            raise ValueError(f"{w}: mcpPosition, pipPosition and dipPosition are needed (a Leap v2 skeleton)")
+        mcp, pip, dip = (_vec(p, k, w) for k in _SKELETON_KEYS)
         tip = _vec(p, "btipPosition", w)
         if tip is None:
             short = _vec(p, "tipPosition", w)
@@ -142,6 +215,133 @@ def leap_hand_frame(hand: dict, fingers: Dict[int, dict], where: str = "hand") -
     return skeleton.adapted_frame(handedness, pos, given, synthesized=synthesized)
 
 
+# Leap's finger `direction` is that of the intermediate bone (pip -> dip): for the thumb, whose Leap mcp is
+# the CMC joint, the OpenXR proximal bone.
+_DIRECTION_BONE = {0: (_core.THUMB_PROXIMAL, _core.THUMB_DISTAL)}
+_DIRECTION_BONE.update({t: (_J[f + "_intermediate"], _J[f + "_distal"]) for t, f in enumerate(_LEAP_FINGERS) if t})
+_CURLS = np.linspace(0.0, 1.0, 41)
+_FINGER_TABLES = {}
+
+
+def _bend(u: np.ndarray, flat: np.ndarray) -> float:
+    """How far a finger's direction bone `u` (unit, palm frame) is bent from `flat`: the signed angle about
+    the palm's X (towards the palm positive, past 180 deg for a bone pointing back and up, so that it keeps
+    growing with the curl)."""
+    angle = math.atan2(-float(u[1]), -float(u[2]))
+    return angle + 2 * math.pi if angle < -math.pi / 2 else angle
+
+
+@dataclasses.dataclass(frozen=True)
+class _FingerTable:
+    """make_hand_frame's fingers in its palm frame. Fingers 1-4 at the curls of _CURLS: their flat direction
+    bone (4, 3), its _bend (4, 41; it grows with the curl, so a lookup inverts it) and their tips (41, 4, 3).
+    The thumb, which also swings across the palm, over a grid of (curl, thumb_opposition) (M, 2): its direction
+    bone (M, 3) and tip (M, 3); a direction takes the grid point whose bone points most nearly along it."""
+    flat: np.ndarray
+    bends: np.ndarray
+    tips: np.ndarray
+    thumb_grid: np.ndarray
+    thumb_dirs: np.ndarray
+    thumb_tips: np.ndarray
+
+    def fit(self, t: int, u: np.ndarray):
+        """(curl, thumb_opposition or None) that point finger t's direction bone along unit palm-frame u."""
+        if t == 0:
+            c, o = self.thumb_grid[int(np.argmax(self.thumb_dirs @ u))]
+            return float(c), float(o)
+        return float(np.interp(_bend(u, self.flat[t - 1]), self.bends[t - 1], _CURLS)), None
+
+    def tip(self, t: int, fit) -> np.ndarray:
+        if t == 0:
+            return self.thumb_tips[int(np.argmin(np.abs(self.thumb_grid - fit).sum(axis=1)))]
+        return np.array([np.interp(fit[0], _CURLS, self.tips[:, t - 1, k]) for k in range(3)])
+
+
+def _finger_table(handedness) -> _FingerTable:
+    key = int(handedness == _core.Handedness.RIGHT)
+    if key not in _FINGER_TABLES:
+        def bone(p, t):
+            a, b = _DIRECTION_BONE[t]
+            return (p[b] - p[a]) / np.linalg.norm(p[b] - p[a])
+
+        dirs, tips = [], []
+        for c in _CURLS:
+            p = np.asarray(_core.make_hand_frame(handedness, curl=float(c)).positions)
+            dirs.append([bone(p, t) for t in range(1, 5)])
+            tips.append([p[skeleton.chain(f)[-1]] for f in _LEAP_FINGERS[1:]])
+        dirs = np.asarray(dirs)
+        bends = np.array([[_bend(d[t], dirs[0, t]) for d in dirs] for t in range(4)])
+        grid, thumb_dirs, thumb_tips = [], [], []
+        for c in _CURLS[::2]:
+            for o in np.linspace(0.0, 1.0, 11):
+                p = np.asarray(_core.make_hand_frame(handedness, curl=[float(c), 0, 0, 0, 0],
+                                                     thumb_opposition=float(o)).positions)
+                grid.append((c, o))
+                thumb_dirs.append(bone(p, 0))
+                thumb_tips.append(p[_core.THUMB_TIP])
+        _FINGER_TABLES[key] = _FingerTable(dirs[0], bends, np.asarray(tips), np.asarray(grid),
+                                           np.asarray(thumb_dirs), np.asarray(thumb_tips))
+    return _FINGER_TABLES[key]
+
+
+def _match_fingers(cost: np.ndarray, slots) -> Dict[int, int]:
+    """{finger type: pointable index}: untyped pointables (rows of `cost`, squared m) given to the free finger
+    `slots` (columns) by the assignment of least total cost (at most 5 x 5: every injective assignment is
+    tried); a pair further apart than MATCH_MM is dropped. Nearest-first greedy matching mislabels a hand
+    that is wider than the synthetic one."""
+    k, m = cost.shape
+    if k <= m:
+        candidates = ([(i, j) for i, j in enumerate(perm)] for perm in itertools.permutations(range(m), k))
+    else:
+        candidates = ([(i, j) for j, i in enumerate(perm)] for perm in itertools.permutations(range(k), m))
+    pairs = min(candidates, key=lambda cand: sum(cost[i, j] for i, j in cand))
+    return {slots[j]: i for i, j in pairs if cost[i, j] <= (MATCH_MM * MM) ** 2}
+
+
+def _palm_frame(hand: dict, pointables, fingers: Dict[int, dict], handedness, where: str):
+    """The hand rebuilt from its palm pose and finger directions (see the module docstring); None without a
+    palm pose."""
+    axes, palm = _palm_axes(hand, where), _vec(hand, "palmPosition", where)
+    if axes is None or palm is None:
+        return None
+    d, n, c = axes
+    right = handedness == _core.Handedness.RIGHT
+    a, b, e = PALM_OFFSET_MM
+    origin = (palm + a * d + b * n + (e if right else -e) * c) * MM
+    rot = np.array([-c, -n, -d]).T  # OpenXR palm: +X index -> little (right hand), +Y back of the hand, -Z fingers
+    table = _finger_table(handedness)
+
+    def local_direction(p, t):
+        u = _vec(p, "direction", f"{where}.pointables[type {t}]")
+        return None if u is None or np.linalg.norm(u) < 1e-6 else rot.T @ (u / np.linalg.norm(u))
+
+    fits = {t: table.fit(t, u) for t, p in fingers.items() if (u := local_direction(p, t)) is not None}
+    untyped = [(p, _vec(p, "tipPosition", where), local_direction(p, "?")) for p in pointables
+               if p.get("type") is None]
+    untyped = [(rot.T @ (tip * MM - origin), u) for _, tip, u in untyped if tip is not None and u is not None]
+    slots = [t for t in range(5) if t not in fits]
+    if untyped and slots:
+        # each pointable against each free finger bent as the pointable's direction says
+        guess = [[table.fit(t, u) for t in slots] for _, u in untyped]
+        cost = np.array([[float(np.sum((tip - table.tip(t, guess[i][j])) ** 2)) for j, t in enumerate(slots)]
+                         for i, (tip, _) in enumerate(untyped)])
+        fits.update({t: guess[i][slots.index(t)] for t, i in _match_fingers(cost, slots).items()})
+    # a finger Leap does not report: as curled as its grab strength says; without one, as curled as the
+    # fingers it does report (a hand that hides some fingers while others point out is not a fist), and
+    # curled fully when it reports none
+    grab = hand.get("grabStrength")
+    seen = [fit[0] for t, fit in fits.items() if t > 0]
+    if isinstance(grab, (int, float)) and math.isfinite(grab):
+        unseen = float(np.clip(grab, 0, 1))
+    else:
+        unseen = float(np.mean(seen)) if seen else 1.0
+    pose = np.r_[origin, skeleton.matrix_quat(rot)]
+    extra = {} if 0 not in fits else {"thumb_opposition": fits[0][1]}
+    frame = _core.make_hand_frame(handedness, pose, curl=[fits[t][0] if t in fits else unseen for t in range(5)],
+                                  **extra)
+    return skeleton.AdaptedFrame(frame, synthesized=tuple(_core.JOINT_NAMES))
+
+
 def _unpack_v2(frames):
     keys = frames[0]
     try:
@@ -155,10 +355,51 @@ def _unpack_v2(frames):
         pointables = []
         for p in fr[3]:
             obj = dict(zip(pointable_keys, p))
-            obj["type"] = int(obj["id"]) - 10 * int(obj["handId"])
+            # the packed format has no finger type: Leap numbers a hand's fingers id = 10 * handId + type
+            if "type" not in obj and isinstance(obj.get("id"), int) and isinstance(obj.get("handId"), int):
+                t = obj["id"] - 10 * obj["handId"]
+                if 0 <= t < 5:
+                    obj["type"] = t
             pointables.append(obj)
         out.append({"id": fr[0], "timestamp": fr[1], "hands": hands, "pointables": pointables})
     return out
+
+
+def _frame_sides(hands, pointables, known: Dict, where: str, notes) -> List[Optional[str]]:
+    """The side of each hand of one frame, the surest first: its type; else its thumb's side; else the side
+    its hand id had before; else the device side it is on (x < 0: left). A side already taken in the frame by
+    a surer hand goes to the other side. `known` ({hand id: side}) is updated."""
+    sides = [h.get("type") for h in hands]
+    taken = {s for s in sides if s is not None}
+
+    def by_thumb(k, hand):
+        return thumb_side(hand, [p for p in pointables if p.get("handId") == hand.get("id")], f"{where}.hands[{k}]")
+
+    def by_device(k, hand):
+        palm = _vec(hand, "palmPosition", f"{where}.hands[{k}]")
+        return "left" if palm is not None and palm[0] < 0 else "right"
+
+    rules = ((by_thumb, "side from the thumb (no type)"),
+             (lambda k, hand: known.get(hand.get("id")), "side from the hand id (no type)"),
+             (by_device, "side from the device side (no type)"))
+    for rule, how in rules:
+        for k, hand in enumerate(hands):
+            if sides[k] is not None:
+                continue
+            side = rule(k, hand)
+            if side is None:
+                continue
+            if side in taken:
+                side, how_ = ("left" if side == "right" else "right"), how + ", the other hand's side taken"
+            else:
+                how_ = how
+            sides[k] = side
+            taken.add(side)
+            notes[how_] += 1
+    for hand, side in zip(hands, sides):
+        if hand.get("id") is not None:
+            known[hand.get("id")] = side
+    return sides
 
 
 def read_leap_json(doc, name: str = "recording") -> LeapRecording:
@@ -173,31 +414,46 @@ def read_leap_json(doc, name: str = "recording") -> LeapRecording:
     frames = _unpack_v2(doc["frames"]) if version == 2 else doc["frames"]
     if not frames:
         raise ValueError(f"{name}: the recording has no frames")
-    times, converted = [], []
-    strengths = {k: np.full((len(frames), 2), np.nan) for k in ("grabStrength", "pinchStrength", "confidence")}
+    notes = collections.Counter()
+    known_sides: Dict = {}
+    times, converted, rows = [], [], []
     for i, fr in enumerate(frames):
-        times.append(float(fr["timestamp"]) * 1e-6)
-        hands = {}
-        for k, hand in enumerate(fr.get("hands", [])):
-            kind = hand.get("type")
-            if kind in hands:
-                continue  # a second hand of the same side: keep the first the tracker listed
-            fingers = {int(p["type"]): p for p in fr.get("pointables", []) if p.get("handId") == hand.get("id")}
-            hands[kind] = leap_hand_frame(hand, fingers, f"{name}.frames[{i}].hands[{k}]")
-            col = 0 if kind == "right" else 1
-            for key, arr in strengths.items():
-                if hand.get(key) is not None:
-                    arr[i, col] = float(hand[key])
+        where = f"{name}.frames[{i}]"
+        stamp = fr.get("timestamp") if isinstance(fr, dict) else None
+        if not isinstance(stamp, (int, float)) or not math.isfinite(stamp):
+            raise ValueError(f"{where}.timestamp: expected a number (microseconds), got {stamp!r}")
+        if times and stamp * 1e-6 < times[-1]:
+            notes["frames out of time order, dropped"] += 1
+            continue
+        hands_in = [h for h in (fr.get("hands") or []) if isinstance(h, dict)]
+        pointables = [p for p in (fr.get("pointables") or []) if isinstance(p, dict) and not p.get("tool")]
+        sides = _frame_sides(hands_in, pointables, known_sides, where, notes)
+        hands, row = {}, np.full((3, 2), np.nan)
+        for k, (hand, side) in enumerate(zip(hands_in, sides)):
+            if side in hands:
+                notes["second hand of a side, dropped"] += 1
+                continue  # keep the first the tracker listed
+            own = [p for p in pointables if p.get("handId") == hand.get("id")]
+            adapted, how = leap_hand_frame(hand, own, f"{where}.hands[{k}]", side)
+            if adapted is None:
+                notes[how] += 1
+                continue
+            if how == "palm":
+                notes["rebuilt from the palm (no full skeleton)"] += 1
+            hands[side] = adapted
+            for r, key in enumerate(("grabStrength", "pinchStrength", "confidence")):
+                if isinstance(hand.get(key), (int, float)):
+                    row[r, 0 if side == "right" else 1] = float(hand[key])
+        times.append(stamp * 1e-6)
         converted.append(hands)
+        rows.append(row)
     t = np.asarray(times)
-    if np.any(np.diff(t) < 0):
-        raise ValueError(f"{name}: timestamps go backwards")
-    return LeapRecording(name, meta, t - t[0], converted, strengths["grabStrength"], strengths["pinchStrength"],
-                         strengths["confidence"])
+    rows = np.asarray(rows)
+    return LeapRecording(name, meta, t - t[0], converted, rows[:, 0], rows[:, 1], rows[:, 2], dict(notes))
 
 
-def load_leap_recording(path) -> LeapRecording:
-    """Reads a leapjs-playback recording: ``.json.lz`` (LZ-String Base64) or plain ``.json``."""
+def read_leap_document(path) -> dict:
+    """The decoded JSON document of a leapjs-playback recording: ``.json.lz`` (LZ-String Base64) or ``.json``."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"path: no such file: {p}")
@@ -205,21 +461,40 @@ def load_leap_recording(path) -> LeapRecording:
     if not text.startswith("{"):
         text = decompress_from_base64(text, f"path ({p.name})")
     try:
-        doc = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as e:
         raise ValueError(f"path ({p.name}): not JSON after decompression: {e}") from None
-    return read_leap_json(doc, p.name.split(".")[0])
+
+
+def load_leap_recording(path) -> LeapRecording:
+    """Reads a leapjs-playback recording (see :func:`read_leap_document`) as OpenXR hand frames."""
+    return read_leap_json(read_leap_document(path), Path(path).name.split(".")[0])
+
+
+def without_skeleton(doc: dict) -> dict:
+    """A copy of a formatVersion 0.1/1 document as a Leap SDK before 2.0 would have sent it: no hand type or
+    strengths, no finger type or bone joints, and only the fingers Leap calls extended (it did not report the
+    others). Measures how well :func:`leap_hand_frame` rebuilds such hands (input_report, tests)."""
+    if doc.get("metadata", {}).get("formatVersion") == 2:
+        raise ValueError("doc: a formatVersion 0.1 or 1 document is expected (frames as objects)")
+    frames = []
+    for fr in doc["frames"]:
+        hands = [{k: v for k, v in h.items() if k not in ("type", "grabStrength", "pinchStrength", "confidence")}
+                 for h in fr.get("hands", [])]
+        pointables = [{k: v for k, v in p.items() if k not in ("type", "carpPosition", "btipPosition", "bases")
+                       + _SKELETON_KEYS} for p in fr.get("pointables", []) if p.get("extended", True)]
+        frames.append({**fr, "hands": hands, "pointables": pointables})
+    return {"metadata": doc["metadata"], "frames": frames}
 
 
 def measure_hand_model(path) -> dict:
     """The proportions of Leap's hand model that :func:`leap_hand_frame` uses for older frames, measured on a
     formatVersion 2 recording (mean and spread over every hand of every frame)."""
-    text = Path(path).read_text().strip()
-    doc = json.loads(text if text.startswith("{") else decompress_from_base64(text, "path"))
+    doc = read_leap_document(path)
     if doc.get("metadata", {}).get("formatVersion") != 2:
         raise ValueError("path: the hand model is measured on a formatVersion 2 recording (it has carp/btip)")
     rows = {"tip_extension": [], "middle_metacarpal_per_proximal": [], "metacarpal_direction": [],
-            "palm_offset_mm": []}
+            "palm_offset_mm": [], "palm_offset_in_palm_axes_mm": []}
     for fr in _unpack_v2(doc["frames"]):
         for hand in fr["hands"]:
             fingers = {p["type"]: p for p in fr["pointables"] if p["handId"] == hand["id"]}
@@ -234,7 +509,9 @@ def measure_hand_model(path) -> dict:
             u = meta / np.linalg.norm(meta)
             rows["metacarpal_direction"].append([u @ d, u @ n, u @ np.cross(d, n)])
             palm = 0.5 * (v(2, "mcpPosition") + v(2, "carpPosition"))
-            rows["palm_offset_mm"].append(np.linalg.norm(palm - np.asarray(hand["palmPosition"], float)))
+            offset = palm - np.asarray(hand["palmPosition"], float)
+            rows["palm_offset_mm"].append(np.linalg.norm(offset))
+            rows["palm_offset_in_palm_axes_mm"].append([offset @ d, offset @ n, offset @ np.cross(d, n)])
     return {k: (np.mean(r, axis=0).round(4).tolist(), float(np.std(r, axis=0).max())) for k, r in rows.items()}
 
 
