@@ -311,14 +311,18 @@ def _palm_frame(hand: dict, pointables, fingers: Dict[int, dict], handedness, wh
     rot = np.array([-c, -n, -d]).T  # OpenXR palm: +X index -> little (right hand), +Y back of the hand, -Z fingers
     table = _finger_table(handedness)
 
-    def local_direction(p, t):
-        u = _vec(p, "direction", f"{where}.pointables[type {t}]")
+    def local_direction(p, label):
+        u = _vec(p, "direction", f"{where}.pointables[{label}]")
         return None if u is None or np.linalg.norm(u) < 1e-6 else rot.T @ (u / np.linalg.norm(u))
 
-    fits = {t: table.fit(t, u) for t, p in fingers.items() if (u := local_direction(p, t)) is not None}
-    untyped = [(p, _vec(p, "tipPosition", where), local_direction(p, "?")) for p in pointables
-               if p.get("type") is None]
-    untyped = [(rot.T @ (tip * MM - origin), u) for _, tip, u in untyped if tip is not None and u is not None]
+    fits = {t: table.fit(t, u) for t, p in fingers.items() if (u := local_direction(p, f"type {t}")) is not None}
+    untyped = []  # (tip, direction) in the palm frame of each pointable without a type
+    for p in pointables:
+        if p.get("type") is None:
+            label = f"id {p.get('id')}"
+            tip, u = _vec(p, "tipPosition", f"{where}.pointables[{label}]"), local_direction(p, label)
+            if tip is not None and u is not None:
+                untyped.append((rot.T @ (tip * MM - origin), u))
     slots = [t for t in range(5) if t not in fits]
     if untyped and slots:
         # each pointable against each free finger bent as the pointable's direction says
