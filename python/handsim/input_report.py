@@ -116,7 +116,7 @@ def rebuild_error(doc: dict, name: str = "recording") -> dict:
     """How far the hands of a formatVersion 0.1/1 document land from their skeleton when the adapter gets them
     as a Leap SDK before 2.0 sent them (adapters.leap.without_skeleton): the share of hands given the right
     side, the largest palm joint distance and each fingertip's median distance (mm), over every hand of
-    every frame."""
+    every frame; None for a recording without hands."""
     ref, bare = read_leap_json(doc, name), read_leap_json(without_skeleton(doc), name)
     tips = [_core.THUMB_TIP, _core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]
     right, palm, dist = [], [], []
@@ -127,6 +127,8 @@ def rebuild_error(doc: dict, name: str = "recording") -> dict:
                 pa, pb = np.asarray(fa.frame.positions), np.asarray(b[side].frame.positions)
                 palm.append(np.linalg.norm(pa[_core.PALM] - pb[_core.PALM]))
                 dist.append(np.linalg.norm(pa[tips] - pb[tips], axis=1))
+    if not palm:
+        return None
     return {"hands": len(right), "side_right": float(np.mean(right)), "palm_max_mm": 1000 * float(np.max(palm)),
             "tip_median_mm": (1000 * np.median(dist, axis=0)).tolist()}
 

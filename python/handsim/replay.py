@@ -11,16 +11,21 @@ position over all frames and hands lies over the middle of the jewelry box's clo
 default box) and the lowest point any hand reaches (a joint centre less its radius) 1 cm below the lid's top;
 no rotation (a Leap's device frame already has +Y up and +Z towards the user).
 Scene ``free_box`` then puts a cube where the hand closes. The closing hand is the one whose Leap grab or pinch
-strength gets highest, if that reaches 0.95; at the first frame its strength reaches 0.5 (half closed) the cube's
-centre goes to the middle between the thumb and index tips, 1.6 cm cube (a pinch: its pinch strength is the
-larger one), or to the middle between the palm and the mean of the four fingertips, 4 cm cube (a grab). The
-cube is then moved out of the palm (along the palm joint's normal, the way the fingers close) in 1 mm steps
-until the hand it is placed for clears it by 1 mm in every frame up to the last one it was open (strength
-below 0.05) before it closed, so that only the closing hand reaches it: for a grab the particles of the
-simulated hand (posed frame by frame as the replay will pose it), for a pinch the index finger (capsules along
-its bones with the joint radii). The thumb is the anvil either closes against and may rest at the cube (a grab
-leaves out the particles nearest its proximal, distal and tip joints). The rule also reports how deep the hand
-reaches into the cube's place while it is at least half closed.
+strength gets highest, if that reaches 0.95: a pinch (its pinch strength is the larger one) gets a 1.6 cm cube,
+its grip the middle between the thumb and index tips; a grab a 4 cm cube, its grip the middle between the palm
+and the mean of the four fingertips. A closure of that hand is a rise of its strength from below 0.05 (open) to
+0.5 (half closed); the next one begins once it was open again. The cube may start at the grip of any frame of a
+closure while the hand stays at least half closed, moved out of the palm (along the palm joint's normal, the way
+the fingers close) in 1 mm steps until it is 1 mm clear of the hand in every frame up to the last one it was
+open before that closure, so that only the closing hand reaches it (a grab: the particles of the simulated hand,
+posed frame by frame as the replay will pose it; a pinch: the index finger, capsules along its bones with the
+joint radii; the thumb is the anvil either closes against and may rest at the cube, a grab leaves out the
+particles nearest its proximal, distal and tip joints), and clear of the palm (the particles nearest the palm,
+wrist and finger metacarpal joints) from then to that frame, so that the hand does not come at it back first.
+These grips are tried in time order; the cube starts at the first one the closing hand (all its particles, from
+the last open frame until it is less than half closed again) reaches half the cube's half extent into (10 mm, a
+pinch 4 mm), or at the deepest if none is reached so far. The rule says which closure and frame it took, how far
+the cube was moved and how deep the hand reaches.
 Without a closing hand the 4 cm cube goes under the first hand's mean palm, its top 1 cm above the lowest point any joint of
 that hand reaches, so the hand brushes it. The table top is moved to the cube's bottom.
 
@@ -54,7 +59,10 @@ BRUSH = 0.01
 PINCH_HALF = 0.008  # pinch: a 1.6 cm cube
 OPEN = 0.05        # a hand counts as open below this Leap strength
 CLEAR = 0.001      # ... by this much
+REACH = 0.5        # the closing hand is to reach this share of the cube's half extent into it
 THUMB_ANVIL = (_core.THUMB_PROXIMAL, _core.THUMB_DISTAL, _core.THUMB_TIP)
+PALM_JOINTS = (_core.PALM, _core.WRIST, _core.INDEX_METACARPAL, _core.MIDDLE_METACARPAL, _core.RING_METACARPAL,
+               _core.LITTLE_METACARPAL)
 HANDS = ("right", "left")
 
 
@@ -136,9 +144,30 @@ def closure_start(motion: Motion) -> Optional[float]:
 
 def _closure_start_index(strength: np.ndarray) -> int:
     """Index of the last frame the strength was below OPEN before it first reached HALF_CLOSED (0 if never)."""
-    k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
-    below = np.nonzero(np.nan_to_num(strength[:k], nan=0) < OPEN)[0]
-    return int(below[-1]) if len(below) else 0
+    closures = _closures(strength)
+    return closures[0][0] if closures else 0
+
+
+def _closures(strength: np.ndarray) -> List[tuple]:
+    """Every closure of a hand as (k0, k, end): its strength rises from below OPEN (last open frame k0, 0 if it
+    never was) to HALF_CLOSED (first frame k) and stays at least half closed until frame `end` (exclusive). The
+    next closure begins only once the hand has been open again: half opening and closing again is the same
+    closure. NaN (no strength) counts as open."""
+    s = np.nan_to_num(strength, nan=0.0)
+    out, start = [], 0
+    while True:
+        half = np.nonzero(s[start:] >= HALF_CLOSED)[0]
+        if not len(half):
+            return out
+        k = start + int(half[0])
+        opened = np.nonzero(s[:k] < OPEN)[0]
+        below_half = np.nonzero(s[k:] < HALF_CLOSED)[0]
+        end = k + int(below_half[0]) if len(below_half) else len(s)
+        out.append((int(opened[-1]) if len(opened) else 0, k, end))
+        reopened = np.nonzero(s[end:] < OPEN)[0]
+        if not len(reopened):
+            return out
+        start = end + int(reopened[0])
 
 
 def placement(motion: Motion) -> np.ndarray:
@@ -146,7 +175,7 @@ def placement(motion: Motion) -> np.ndarray:
     the lowest point any hand reaches (a joint's centre less its radius) DIP below the lid's top face."""
     palms = motion.palms()
     if len(palms) == 0:
-        raise ValueError(f"{motion.name}: no tracked hand in any frame")
+        return np.zeros(3)  # no tracked hand in any frame (a tracker left running): nothing to place
     lowest = min(float(np.min(np.asarray(a.frame.positions)[np.asarray(a.frame.valid), 1]
                               - np.asarray(a.frame.radii)[np.asarray(a.frame.valid)]))
                  for f in motion.frames for a in f.values() if a.frame.tracked)
@@ -182,28 +211,66 @@ def _particles(frames, hand_def, skip=()):
     """Centres (M, 3) and radii (M,) of the simulated hand's particles in every one of `frames` (a World with
     only that hand, skinned frame by frame): the volume the hand will occupy in the replay. Particles whose
     nearest joint is one of `skip` (joint indices) are left out."""
+    q, radius = _particles_by_frame(frames, hand_def, skip)
+    q = np.concatenate(q) if q else np.zeros((0, 3))
+    return q, np.full(len(q), radius)
+
+
+def _particles_by_frame(frames, hand_def, skip=()):
+    """The centres of _particles, one (M_i, 3) array per frame ((0, 3) where the hand is untracked), and their
+    radius."""
     world = _core.World(_core.WorldDef(ground=False, gravity=[0, 0, 0]))
     hand = world.add_hand(hand_def)
-    radius = world.hand_model(hand).particle_radius
     points = []
     for frame in frames:
         world.step(DT, [frame])
-        if world.hand_tracked(hand):
-            q = np.asarray(world.hand_particles(hand))
-            if skip:
-                joints = np.asarray(frame.positions)
-                nearest = np.argmin(np.linalg.norm(q[:, None] - joints[None], axis=2), axis=1)
-                q = q[~np.isin(nearest, skip)]
-            points.append(q)
-    q = np.concatenate(points) if points else np.zeros((0, 3))
-    return q, np.full(len(q), radius)
+        q = np.asarray(world.hand_particles(hand)) if world.hand_tracked(hand) else np.zeros((0, 3))
+        if skip and len(q):
+            joints = np.asarray(frame.positions)
+            nearest = np.argmin(np.linalg.norm(q[:, None] - joints[None], axis=2), axis=1)
+            q = q[~np.isin(nearest, skip)]
+        points.append(q)
+    return points, world.hand_model(hand).particle_radius
 
 
 def _gaps(q, r, centre, half):
     """Signed distance (m) from each sphere (centres q, radii r) to an axis-aligned cube; negative: it
     overlaps by that much."""
     d = np.abs(q - centre) - half
-    return np.linalg.norm(np.maximum(d, 0), axis=1) + np.minimum(d.max(axis=1), 0) - r
+    o = np.maximum(d, 0)
+    # column by column: the same numbers as norm(o, axis=1) and d.max(axis=1), three times as fast (the
+    # placement evaluates it for every grip it tries)
+    inside = np.minimum(np.maximum(np.maximum(d[:, 0], d[:, 1]), d[:, 2]), 0)
+    return np.sqrt(o[:, 0] * o[:, 0] + o[:, 1] * o[:, 1] + o[:, 2] * o[:, 2]) + inside - r
+
+
+def _move_out(q, r, centre, out, half, limit=200) -> int:
+    """Whole mm (at most `limit`) the cube must move along the unit vector `out` until every sphere (centres q,
+    radii r) clears it by CLEAR: the first clear one of 0, 1, 2 ... mm."""
+    # only spheres near the cube's path can block it (within its circumradius of the segment it may travel;
+    # 1 µm more against rounding)
+    rel = q - centre
+    perp = rel - np.clip(rel @ out, 0, limit * 1e-3)[:, None] * out
+    near = np.einsum("ij,ij->i", perp, perp) < (half * math.sqrt(3) + r + CLEAR + 1e-6) ** 2
+    q, r = q[near], r[near]
+    moved = 0
+    while moved < limit:
+        gap = _gaps(q, r, centre + moved * 1e-3 * out, half).min() if len(q) else math.inf
+        if gap >= CLEAR:
+            return moved
+        # a gap changes by at most as much as the cube moves: the next CLEAR - gap of steps are all blocked
+        # too, so they are skipped (the answer is that of trying every mm, found in a few tries)
+        moved += max(1, math.ceil((CLEAR - gap) * 1000 - 1e-6))
+    return limit
+
+
+def _grip(frame, pinch: bool) -> np.ndarray:
+    """Where the hand of `frame` holds a cube: between the thumb and index tips (a pinch) or between the palm
+    and the mean of the four fingertips (a grab)."""
+    p = np.asarray(frame.positions)
+    if pinch:
+        return 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
+    return 0.5 * (p[_core.PALM] + p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0))
 
 
 def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict, str):
@@ -217,7 +284,9 @@ def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict,
         centre, h, rule = _cube_for_closing_hand(motion, closing, hand_def)
         centre = centre + shift
         return {"position": [float(centre[0]), float(centre[1] - h), float(centre[2])], "half_extent": h}, rule
-    side = next(s for s in HANDS if any(s in f for f in motion.frames))
+    side = next((s for s in HANDS if len(motion.palms(s))), None)
+    if side is None:
+        return {"position": list(_scenes.FREE_BOX_DEFAULTS["position"])}, "no tracked hand: the default cube"
     palms = motion.palms(side) + shift
     lowest = min(float(np.nanmin(np.asarray(f[side].frame.positions)[np.asarray(f[side].frame.valid), 1]))
                  for f in motion.frames if side in f and f[side].frame.tracked) + shift[1]
@@ -231,44 +300,75 @@ def _cube_for_closing_hand(motion: Motion, closing, hand_def) -> (np.ndarray, fl
     """Centre (motion coordinates), half extent and description of the cube the closing hand is to grasp."""
     side, kind, strength = closing
     pinch = kind == "pinch"
-    k = int(np.argmax(np.nan_to_num(strength, nan=-1) >= HALF_CLOSED))
-    frame = motion.frames[k][side].frame
-    p = np.asarray(frame.positions)
-    if pinch:
-        h = PINCH_HALF
-        centre = 0.5 * (p[_core.THUMB_TIP] + p[_core.INDEX_TIP])
-        where = "between the thumb and index tips"
+    h = PINCH_HALF if pinch else _scenes.FREE_BOX_DEFAULTS["half_extent"]
+    where = "between the thumb and index tips" if pinch else "between the palm and the fingertips"
+    closures = _closures(strength)
+    # The first grip (in time order) that the closing hand reaches REACH deep into wins. The grip of the first
+    # half-closed frame may be out of the fist's way, e.g. when the hand rises while it closes (confidence2); a
+    # later grip of the same closure lies where the fist went. Not the deepest grip: reach saturates near the
+    # cube's centre, so the deepest wins by fractions of a mm (in whole mm another grip wins in
+    # confidence-demo-eighth-res, and an open hand grasps that cube); it often lies late in a long hold (1.2 s
+    # after the hand half closed in confidence-demo); for a pinch it lost pinch-half-res's grasp; and finding
+    # it takes every grip (about 10 s for confidence-demo's 271). The first deep enough grip leaves every
+    # placement whose first grip was reached as it was.
+    need = REACH * h
+    tried = []
+    for candidate in _grip_candidates(motion, side, pinch, h, closures, hand_def):
+        tried.append(candidate)
+        if candidate[0] >= need:
+            break
     else:
-        h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
-        tips = p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0)
-        centre = 0.5 * (p[_core.PALM] + tips)
-        where = "between the palm and the fingertips"
-    # the hand must not touch the cube before it closes: move the cube 1 mm at a time until the hand clears
-    # it in every frame up to k0, the last one it was open before it closed
-    k0 = _closure_start_index(strength)
-    before = [fr[side].frame for fr in motion.frames[:k0 + 1] if side in fr]
-    # a grab: no particle of the simulated hand but the thumb's may touch the cube early; a pinch: the index
-    # finger may not. The thumb is the anvil either closes against: it may rest at the cube.
-    q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def, THUMB_ANVIL)
-    # out of the palm (along its normal, OpenXR's -Y of the palm joint): the way the fingers close, so the
-    # closing hand still sweeps through the cube whichever way the palm faces
-    out = -_sk.quat_matrix(np.asarray(frame.orientations)[_core.PALM])[:, 1]
-    moved = 0
-    while moved < 200 and (_gaps(q, r, centre + moved * 1e-3 * out, h) < CLEAR).any():
-        moved += 1
-    centre = centre + moved * 1e-3 * out
+        candidate = max(tried, key=lambda c: c[0])  # none is reached so deep: the deepest, the earliest of equals
+    reach, n, k, j, moved, centre = candidate
+    rule = f"{kind} of the {side} hand" + (f", closure {n + 1} of {len(closures)}," if len(closures) > 1 else "")
+    rule += f" half closed at t={motion.times[k]:.2f} s (frame {k}): {2 * h * 100:.1f} cm cube {where}"
+    if j != k:
+        rule += f" at t={motion.times[j]:.2f} s (frame {j})"
+    if reach < need:
+        rule += f" (no grip of the {len(tried)} half-closed frames is reached {need * 1000:.0f} mm deep: the deepest)"
+    elif len(tried) > 1:
+        rule += (f" (the grips of the {len(tried) - 1} half-closed frames before it are reached less than "
+                 f"{need * 1000:.0f} mm deep)")
     if moved > 0:
-        where += f", moved {moved} mm out of the palm to clear the opening hand"
-    # how deep the closing hand (all of it) goes where the cube starts, until it is less than half closed
-    # again: a hand that barely reaches it cannot be expected to grasp it
-    opened = np.nonzero(np.nan_to_num(strength[k:], nan=0) < HALF_CLOSED)[0]
-    end = k + (int(opened[0]) if len(opened) else len(strength) - k)
-    q, r = _particles([fr[side].frame for fr in motion.frames[k0 + 1:end] if side in fr], hand_def)
-    if len(q):
-        where += f"; the closing hand reaches {-1000 * _gaps(q, r, centre, h).min():.0f} mm into it"
-    rule = (f"{kind} of the {side} hand half closed at t={motion.times[k]:.2f} s (frame {k}): "
-            f"{2 * h * 100:.1f} cm cube {where}")
+        rule += f", moved {moved} mm out of the palm to clear the opening hand and the closing palm"
+    if math.isfinite(reach):
+        rule += f"; the closing hand reaches {round(1000 * reach)} mm into it"
     return centre, h, rule
+
+
+def _grip_candidates(motion: Motion, side: str, pinch: bool, h: float, closures, hand_def):
+    """(reach m, closure index, its first half-closed frame, frame, mm moved, centre) of the cube placed at the
+    grip of every frame of every closure while the hand is at least half closed, in time order."""
+    not_palm = tuple(i for i in range(_core.JOINT_COUNT) if i not in PALM_JOINTS)
+    for n, (k0, k, end) in enumerate(closures):
+        # the hand must not touch the cube before it closes: every one of its frames up to k0, the last one it
+        # was open before this closure, must clear the cube. A grab: no particle of the simulated hand (posed as
+        # the replay will pose it) but the thumb's; a pinch: not the index finger. The thumb is the anvil either
+        # closes against: it may rest at the cube.
+        before = [fr[side].frame for fr in motion.frames[:k0 + 1] if side in fr]
+        q, r = _bone_samples(before, fingers=("index",)) if pinch else _particles(before, hand_def, THUMB_ANVIL)
+        closing = [i for i in range(k0 + 1, end) if side in motion.frames[i]]
+        frames = [motion.frames[i][side].frame for i in closing]
+        # nor may the palm go through the cube on its way to the grip (from k0 to the grip's frame): the fingers
+        # close around the cube; a hand that gets to its grip back first (e.g. palm down and rising while it
+        # closes) would push the cube away before it
+        palm, radius = _particles_by_frame(frames, hand_def, not_palm)
+        # how deep the closing hand (all of it) goes where the cube starts, from k0 until it is less than half
+        # closed again: a hand that barely reaches it cannot be expected to grasp it
+        qc, rc = _particles(frames, hand_def)
+        for m, j in enumerate(closing):
+            if j < k:
+                continue
+            frame = motion.frames[j][side].frame
+            # out of the palm (along its normal, OpenXR's -Y of the palm joint): the way the fingers close, so
+            # the closing hand still sweeps through the cube whichever way the palm faces
+            out = -_sk.quat_matrix(np.asarray(frame.orientations)[_core.PALM])[:, 1]
+            grip = _grip(frame, pinch)
+            qp = np.concatenate([q] + palm[:m + 1])
+            moved = _move_out(qp, np.r_[r, np.full(len(qp) - len(q), radius)], grip, out, h)
+            centre = grip + moved * 1e-3 * out
+            reach = -_gaps(qc, rc, centre, h).min() if len(qc) else -math.inf
+            yield reach, n, k, j, moved, centre
 
 
 def step_frames(motion: Motion, dt: float = DT) -> np.ndarray:

@@ -3,8 +3,11 @@
 The parser is handsim's own (numpy only): ``HIERARCHY`` with ``ROOT`` / ``JOINT`` / ``End Site`` blocks,
 ``OFFSET`` and ``CHANNELS``, then ``MOTION`` with ``Frames:``, ``Frame Time:`` and one line of channel values
 per frame. Forward kinematics follows the BVH convention: a joint's local transform is the translation by its
-``OFFSET`` (plus any position channels) followed by its rotation channels applied in the order the file lists
-them (``Yrotation Xrotation Zrotation`` gives R = Ry Rx Rz), in degrees; an End Site is a point at its offset.
+``OFFSET`` followed by its rotation channels applied in the order the file lists them (``Yrotation Xrotation
+Zrotation`` gives R = Ry Rx Rz), in degrees; an End Site is a point at its offset. A position channel replaces
+the offset along its axis, as Blender's importer and the maintained ``bvhio`` library read it (adding them
+moved a root with a non-zero offset by its offset twice). The tests check the forward kinematics against
+``bvhio`` on a random hierarchy with mixed channel orders and on the hand files :func:`write_bvh` writes.
 
 Perception Neuron writes centimetres (``scale`` 0.01 turns them into metres) in a right-handed, Y-up space.
 Its finger joints map to OpenXR as (side ``Right`` or ``Left``):
@@ -72,7 +75,7 @@ class Bvh:
                 v = values[j.first_channel + k]
                 kind, axis = ch[1:].lower(), _AXES[ch[0].upper()]
                 if kind == "position":
-                    local_t[axis] += v
+                    local_t[axis] = v
                 else:
                     local_r = local_r @ _axis_rotation(axis, math.radians(v))
             if j.parent < 0:
