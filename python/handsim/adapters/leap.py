@@ -129,7 +129,7 @@ def _typed_fingers(pointables) -> Dict[int, dict]:
     out = {}
     for p in pointables:
         t = p.get("type")
-        if isinstance(t, (int, float)) and int(t) == t and 0 <= t < 5 and int(t) not in out:
+        if isinstance(t, (int, float)) and math.isfinite(t) and int(t) == t and 0 <= t < 5 and int(t) not in out:
             out[int(t)] = p
     return out
 

@@ -18,7 +18,9 @@ Coordinates:
   that the wrist lies ``palm_length`` m (default: handsim's adult hand, 9 cm) from the middle knuckle, the
   axes converted as above and the wrist put at ``origin``.
 
-MediaPipe labels handedness as seen in a mirrored (selfie) image; pass the hand's real side. Landmarks with
+Pass the hand's real side: the legacy ``mediapipe.solutions.hands`` labels handedness as seen in a mirrored
+(selfie) image, while the Tasks ``HandLandmarker`` of mediapipe 1.2.3 named the real side of an unmirrored
+image in 15 of 16 renders (tests/python/data, ``scripts/mediapipe_fixtures``). Landmarks with
 ``visibility`` below ``min_visibility`` (or NaN landmarks, when ``visibility`` marks them) are invalid, and so
 are the joints built from them.
 """
