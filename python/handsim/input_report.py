@@ -21,10 +21,11 @@ from . import _core
 from . import render as _render
 from . import replay as _replay
 from .plots import save_figure
-from .adapters.leap import read_leap_document, read_leap_json, without_skeleton
+from .adapters.leap import fit_side, read_leap_document, read_leap_json, without_skeleton
 
 BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
 HINGE_TOLERANCE_M = 1e-6
+SAME_HAND_M = 0.02  # a rebuilt hand of a side with its palm this near the skeleton's is that hand (the rebuild's palm error is 4 mm at most)
 
 
 def default_assets() -> Path:
@@ -115,22 +116,36 @@ def replay_on_both_scenes(motion, name: str = "", hand_defs=None) -> list:
 def rebuild_error(doc: dict, name: str = "recording") -> dict:
     """How far the hands of a formatVersion 0.1/1 document land from their skeleton when the adapter gets them
     as a Leap SDK before 2.0 sent them (adapters.leap.without_skeleton): the share of hands given the right
-    side, the largest palm joint distance and each fingertip's median distance (mm), over every hand of
-    every frame; None for a recording without hands."""
-    ref, bare = read_leap_json(doc, name), read_leap_json(without_skeleton(doc), name)
+    side (the rebuilt hand of that side has its palm within SAME_HAND_M of the skeleton's), and over those,
+    the largest palm joint distance and each fingertip's median distance (mm); None for a recording without
+    hands."""
+    stripped = without_skeleton(doc)
+    ref, bare = read_leap_json(doc, name), read_leap_json(stripped, name)
     tips = [_core.THUMB_TIP, _core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]
+    # the side rules frame by frame, against the types the stripped hands had: the finger fit (hands with at
+    # least 3 fingers) and the device side
+    fit, device = [], []
+    for fr, fr_bare in zip(doc["frames"], stripped["frames"]):
+        for hand, bare_hand in zip(fr.get("hands", []), fr_bare["hands"]):
+            own = [p for p in fr_bare["pointables"] if p.get("handId") == bare_hand.get("id")]
+            side = fit_side(bare_hand, own)
+            if side is not None:
+                fit.append(side == hand.get("type"))
+            device.append((bare_hand["palmPosition"][0] < 0) == (hand.get("type") == "left"))
     right, palm, dist = [], [], []
     for a, b in zip(ref.frames, bare.frames):
         for side, fa in a.items():
-            right.append(side in b)
-            if side in b:
-                pa, pb = np.asarray(fa.frame.positions), np.asarray(b[side].frame.positions)
+            pa = np.asarray(fa.frame.positions)
+            pb = np.asarray(b[side].frame.positions) if side in b else np.full_like(pa, np.inf)
+            right.append(np.linalg.norm(pa[_core.PALM] - pb[_core.PALM]) < SAME_HAND_M)
+            if right[-1]:
                 palm.append(np.linalg.norm(pa[_core.PALM] - pb[_core.PALM]))
                 dist.append(np.linalg.norm(pa[tips] - pb[tips], axis=1))
     if not palm:
         return None
     return {"hands": len(right), "side_right": float(np.mean(right)), "palm_max_mm": 1000 * float(np.max(palm)),
-            "tip_median_mm": (1000 * np.median(dist, axis=0)).tolist()}
+            "tip_median_mm": (1000 * np.median(dist, axis=0)).tolist(),
+            "fit_side_right": (int(np.sum(fit)), len(fit)), "device_side_right": (int(np.sum(device)), len(device))}
 
 
 def strength_agreement(motion: "_replay.Motion") -> dict:
@@ -185,13 +200,16 @@ def table(rows) -> str:
 
 
 def rebuild_table(rows) -> str:
-    out = ["| recording | hands | right side | palm joint max | fingertip median: thumb, index, middle, ring, little "
-           "| closing hand, closure start: Leap's strengths / the skeleton's |", "|---|---:|---:|---:|---|---|"]
+    out = ["| recording | hands | right side | per frame: finger fit / device side right | palm joint max | "
+           "fingertip median: thumb, index, middle, ring, little | closing hand, closure start: Leap's strengths "
+           "/ the skeleton's |", "|---|---:|---:|---|---:|---|---|"]
     say = lambda c: "none" if c is None else f"{c[0]} {c[1]} {c[2]:.2f} s"
+    share = lambda k_n: f"{k_n[0]}/{k_n[1]}"
     for r in rows:
         e, g = r["rebuilt"], r["strengths"]
-        cells = ["–"] * 4 if e is None else [
-            str(e["hands"]), f"{100 * e['side_right']:.1f} %", f"{e['palm_max_mm']:.1f} mm",
+        cells = ["–"] * 5 if e is None else [
+            str(e["hands"]), f"{100 * e['side_right']:.1f} %",
+            f"{share(e['fit_side_right'])} / {share(e['device_side_right'])}", f"{e['palm_max_mm']:.1f} mm",
             ", ".join(f"{v:.0f}" for v in e["tip_median_mm"]) + " mm"]
         out.append(f"| {r['name']} | " + " | ".join(cells) + f" | {say(g['leap'])} / {say(g['skeleton'])} |")
     return "\n".join(out)
@@ -210,7 +228,9 @@ def main(argv=None) -> int:
     rows = run_all(args.assets, args.img)
     text = table(rows) + "\n\nPictures: " + ", ".join(f"[{r['name']}](img/input_{r['name']}.png)" for r in rows)
     text += ("\n\nThe same hands as a Leap SDK before 2.0 sent them (`adapters.leap.without_skeleton`: no types, "
-             "bone joints or strengths, no curled fingers), rebuilt from the palm, against the skeleton's joints; "
+             "bone joints or strengths, no curled fingers), rebuilt from the palm, against the skeleton's joints "
+             "(right side: the rebuilt hand of the hand's side has its palm within 2 cm of the skeleton's; per "
+             "frame: the finger fit, where at least 3 fingers are reported, and the device side alone); "
              "and the closing hand from Leap's strengths and from the skeleton's (`replay.with_strengths`; a "
              "formatVersion 2 file is not stripped):\n\n" + rebuild_table(rows))
     text += (f"\n\n{len(rows)} recordings, {sum(len(r['checks']) for r in rows)} checks, "

@@ -236,31 +236,42 @@ FINGER_JOINTS = [j for f in ("INDEX", "MIDDLE", "RING", "LITTLE") for j in
 
 @pytest.mark.parametrize("handedness", [RIGHT, LEFT])
 def test_leap_hands_without_a_skeleton_or_type_are_rebuilt_from_the_palm(handedness):
-    """Leap before 2.0: the side comes from the device side, the palm joint from palmPosition, the fingers it
-    reports bend as their directions say, the ones it does not report curl by the grab strength (1 without)."""
+    """Leap before 2.0: the side comes from how the fingers fit each side's hand (over the hand id's frames,
+    even on the other side of the device), the palm joint from palmPosition, the fingers it reports bend as
+    their directions say, the ones it does not report curl as the grab strength says, or fully."""
     poses = [handsim.make_hand_frame(handedness, PALM_POSE, curl=[0.0, c, c, 0.5 * c, c]) for c in (0.0, 0.4, 0.8)]
     fist = handsim.make_hand_frame(handedness, PALM_POSE, curl=1.0)
     sign = 1 if handedness == RIGHT else -1
-    frames = []
-    for i, f in enumerate(poses + [fist]):
-        hand, pointables = leap_v1_objects(f, seen=(0, 1, 2, 3, 4) if i < 3 else (0,))
-        for obj in [hand] + pointables:  # 40 cm to the side of the device: that tells the side of a hand without a type
-            key = "palmPosition" if obj is hand else "tipPosition"
-            obj[key][0] += sign * 400
-        frames.append({"id": i, "timestamp": 9000 * i, "hands": [hand], "pointables": pointables})
-    rec = read_leap_json({"metadata": {"formatVersion": 1}, "frames": frames})
+
+    def doc(frames, shift_mm, seen):
+        out = []
+        for i, f in enumerate(frames):
+            hand, pointables = leap_v1_objects(f, seen=seen(i))
+            for obj in [hand] + pointables:
+                obj["palmPosition" if obj is hand else "tipPosition"][0] += shift_mm
+            out.append({"id": i, "timestamp": 9000 * i, "hands": [hand], "pointables": pointables})
+        return {"metadata": {"formatVersion": 1}, "frames": out}
+
     side = "right" if handedness == RIGHT else "left"
+    # 40 cm on the other side of the device: the fingers, not the place, tell the side
+    rec = read_leap_json(doc(poses + [fist], -sign * 400, lambda i: (0, 1, 2, 3, 4) if i < 3 else (0,)))
     assert [list(f) for f in rec.frames] == [[side]] * 4
-    assert rec.notes == {"side from the device side (no type)": 1, "side from the hand id (no type)": 3,
-                         "rebuilt from the palm (no full skeleton)": 4}
+    assert rec.notes == {"side from the finger fit (no type)": 4, "rebuilt from the palm (no full skeleton)": 4}
     for f, conv in zip(poses + [fist], rec.frames):
         a = conv[side]
         assert set(a.synthesized) == set(handsim.JOINT_NAMES) and a.invalid == ()
-        got, want = np.asarray(a.frame.positions), np.asarray(f.positions) + [sign * 0.4, 0, 0]
+        got, want = np.asarray(a.frame.positions), np.asarray(f.positions) - [sign * 0.4, 0, 0]
         np.testing.assert_allclose(got[handsim.PALM], want[handsim.PALM], atol=1e-9)
         np.testing.assert_allclose(a.frame.orientations[handsim.PALM], f.orientations[handsim.PALM], atol=1e-9)
         assert np.abs(got[FINGER_JOINTS] - want[FINGER_JOINTS]).max() < 1e-3  # curl recovered to 1 mm
         np.testing.assert_allclose(flexion_deg(a.frame)[FLEX], flexion_deg(f)[FLEX], atol=1.0)
+    # too few fingers to fit (a fist showing its thumb only): the device side, then the hand id
+    rec = read_leap_json(doc([fist, fist], sign * 400, lambda i: (0,)))
+    assert [list(f) for f in rec.frames] == [[side]] * 2
+    assert rec.notes == {"side from the device side (no type)": 1, "side from the hand id (no type)": 1,
+                         "rebuilt from the palm (no full skeleton)": 2}
+    np.testing.assert_allclose(np.asarray(rec.frames[1][side].frame.positions)[FINGER_JOINTS],
+                               (np.asarray(fist.positions) + [sign * 0.4, 0, 0])[FINGER_JOINTS], atol=1e-9)
 
 
 def test_leap_frames_with_missing_parts_are_kept():
