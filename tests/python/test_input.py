@@ -447,13 +447,17 @@ def test_mrtk_poses_give_the_named_shapes(mrtk_poses):
 
 
 def test_mrtk_pose_through_mediapipe_keeps_its_joint_angles(mrtk_poses):
-    """Device orientations (MRTK) vs orientations rebuilt from 21 positions: the flexion angles agree."""
+    """Device orientations (MRTK) vs orientations rebuilt from 21 positions: the flexion angles agree; the
+    knuckles' (MCP) less closely, since MediaPipe has no metacarpals and the adapter puts their bases on the
+    wrist-knuckle line (docs/input.md)."""
+    knuckles = [handsim.INDEX_PROXIMAL, handsim.MIDDLE_PROXIMAL, handsim.RING_PROXIMAL, handsim.LITTLE_PROXIMAL]
     for name in ("Flat", "Grab", "PinchSteadyWrist", "Poke", "ThumbsUp"):  # not Open, Pinch: see the README
         f = mrtk.load_mrtk_pose(mrtk_poses[name]).frame
         a = mediapipe.from_mediapipe(mediapipe.landmarks_of(f), RIGHT)
         finger = [j for j in FLEX if j > handsim.THUMB_TIP]
-        diff = np.abs(flexion_deg(a.frame) - flexion_deg(f))[finger]
-        assert diff.max() < 4.0, (name, diff.round(1))
+        diff = np.abs(flexion_deg(a.frame) - flexion_deg(f))
+        assert diff[finger].max() < 4.0, (name, diff[finger].round(1))
+        assert diff[knuckles].max() < 8.0, (name, diff[knuckles].round(1))
 
 
 def test_mrtk_errors(tmp_path):
