@@ -210,6 +210,49 @@ def test_leap_errors_name_what_is_wrong(tmp_path):
         load_leap_recording(tmp_path / "bad.json.lz")
 
 
+@pytest.mark.parametrize("version", [0.1, 2])
+def test_fuzzed_leap_documents_load_or_name_what_is_wrong(version):
+    """Seeded mutations of a small document (fields dropped, or set to null, strings, numbers, lists,
+    objects, NaN, 1e300): each reads as a recording, or raises ValueError naming where; nothing else."""
+    import copy
+    import random
+    base = leap_doc([source("flat"), source("fist"), source("pinch")], version)
+
+    def places(obj, at=()):
+        items = obj.items() if isinstance(obj, dict) else enumerate(obj) if isinstance(obj, list) else ()
+        for k, v in items:
+            yield at + (k,)
+            yield from places(v, at + (k,))
+
+    where = list(places(base))
+    rng = random.Random(12)
+    values = [None, "x", 3, -1.5, True, [], {}, [1, 2], [float("nan"), 0, 0], [1e300, 0, 0], {"a": 1}]
+    loaded = named = 0
+    for _ in range(400):
+        doc = copy.deepcopy(base)
+        for _ in range(rng.randint(1, 3)):
+            *path, last = rng.choice(where)
+            try:
+                parent = doc
+                for k in path:
+                    parent = parent[k]
+                if isinstance(parent, dict) and rng.random() < 0.4:
+                    parent.pop(last, None)
+                else:
+                    parent[last] = rng.choice(values)
+            except (KeyError, IndexError, TypeError):
+                pass  # an earlier mutation took that place away
+        try:
+            rec = read_leap_json(doc, "fuzz")
+            loaded += 1
+            assert all(np.isfinite(np.asarray(a.frame.positions)[np.asarray(a.frame.valid)]).all()
+                       for f in rec.frames for a in f.values())
+        except ValueError as e:
+            assert str(e).startswith(("fuzz", "frames")), e
+            named += 1
+    assert loaded > 50 and named > 50, (loaded, named)
+
+
 def leap_v1_objects(frame, hand_id=7, seen=(0, 1, 2, 3, 4)):
     """A hand as Leap SDKs before 2.0 sent it, made from a HandFrame (mm): no hand or finger type, no bone
     joints; a pointable (tipPosition and direction) for each finger in `seen` only, in a shuffled order."""

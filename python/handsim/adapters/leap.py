@@ -66,6 +66,7 @@ TIP_EXTENSION = 1.2987
 MIDDLE_METACARPAL_PER_PROXIMAL = 1.4475
 METACARPAL_DIRECTION = (0.9885, 0.1483, 0.0295)  # in (direction, palmNormal, direction x palmNormal), right hand
 PALM_OFFSET_MM = (-9.0783, -9.1987, 1.9203)  # OpenXR palm - Leap palmPosition, same axes, right hand
+LIMIT_MM = 1e6  # 1 km: far beyond any tracker, near enough that squares and products stay finite
 MATCH_MM = 80.0  # an untyped pointable further than this from every flat fingertip is not matched
 SUPPORTED_FORMATS = (0.1, 1, 2)
 _J = skeleton.JOINT
@@ -102,12 +103,17 @@ class LeapRecording:
 
 
 def _vec(obj, key, where):
+    """obj[key] as a (3,) array; None when absent or null. Anything but 3 finite numbers within LIMIT_MM
+    (a Leap sees about half a metre) is an error naming the field."""
     v = obj.get(key)
     if v is None:
         return None
-    a = np.asarray(v, float)
-    if a.shape != (3,) or not np.isfinite(a).all():
-        raise ValueError(f"{where}.{key}: expected 3 finite numbers, got {v!r}")
+    try:
+        a = np.asarray(v, float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (3,) or not np.isfinite(a).all() or np.abs(a).max() > LIMIT_MM:
+        raise ValueError(f"{where}.{key}: expected 3 finite numbers within ±{LIMIT_MM:g}, got {v!r}")
     return a
 
 
@@ -379,14 +385,21 @@ def fit_side(hand: dict, pointables, where: str = "hand") -> Optional[str]:
 
 
 def _unpack_v2(frames):
+    if not isinstance(frames, list) or not frames:
+        raise ValueError("frames: expected a list of the packing structure and the packed frames")
     keys = frames[0]
     try:
         hand_keys = keys[2]["hands"][0]
         pointable_keys = keys[3]["pointables"][0]
     except (IndexError, KeyError, TypeError):
-        raise ValueError("frames[0]: not a formatVersion 2 packing structure") from None
+        hand_keys = pointable_keys = None
+    if not all(isinstance(k, list) and all(isinstance(x, str) for x in k) for k in (hand_keys, pointable_keys)):
+        raise ValueError("frames[0]: not a formatVersion 2 packing structure")
     out = []
     for i, fr in enumerate(frames[1:], 1):
+        if not (isinstance(fr, list) and len(fr) >= 4 and all(isinstance(fr[k], list) for k in (2, 3))
+                and all(isinstance(x, list) for x in fr[2] + fr[3])):
+            raise ValueError(f"frames[{i}]: not a packed frame ([id, timestamp, [hands], [pointables], ...])")
         hands = [dict(zip(hand_keys, h)) for h in fr[2]]
         pointables = []
         for p in fr[3]:
@@ -401,10 +414,33 @@ def _unpack_v2(frames):
     return out
 
 
-def _frame_hands(fr):
-    """(hands, pointables) of one frame object: the dicts among them, tools left out."""
-    hands = [h for h in (fr.get("hands") or []) if isinstance(h, dict)]
-    return hands, [p for p in (fr.get("pointables") or []) if isinstance(p, dict) and not p.get("tool")]
+def _checked_frames(frames, name: str) -> List[dict]:
+    """The frames as {"timestamp", "hands", "pointables"} with hands and pointables lists of objects, tools
+    left out; anything of another shape is an error naming it (a missing list is an empty one)."""
+    if not isinstance(frames, list):
+        raise ValueError(f"{name}.frames: expected a list, got {type(frames).__name__}")
+    out = []
+    for i, fr in enumerate(frames):
+        where = f"{name}.frames[{i}]"
+        if not isinstance(fr, dict):
+            raise ValueError(f"{where}: expected an object, got {type(fr).__name__}")
+        stamp = fr.get("timestamp")
+        if isinstance(stamp, bool) or not isinstance(stamp, (int, float)) or not math.isfinite(stamp):
+            raise ValueError(f"{where}.timestamp: expected a number (microseconds), got {stamp!r}")
+        lists = {}
+        for key in ("hands", "pointables"):
+            items = fr.get(key) or []
+            if not isinstance(items, list) or not all(isinstance(x, dict) for x in items):
+                raise ValueError(f"{where}.{key}: expected a list of objects")
+            lists[key] = items
+        for k, hand in enumerate(lists["hands"]):
+            for key, kinds in (("id", (int, str)), ("type", (str,))):
+                if hand.get(key) is not None and (isinstance(hand[key], bool) or not isinstance(hand[key], kinds)):
+                    raise ValueError(f"{where}.hands[{k}].{key}: expected {' or '.join(t.__name__ for t in kinds)}, "
+                                     f"got {hand[key]!r}")
+        out.append({"timestamp": stamp, "hands": lists["hands"],
+                    "pointables": [p for p in lists["pointables"] if not p.get("tool")]})
+    return out
 
 
 def _fitted_sides(frames, name: str) -> Dict:
@@ -415,9 +451,7 @@ def _fitted_sides(frames, name: str) -> Dict:
     votes = collections.defaultdict(collections.Counter)
     together = collections.defaultdict(set)
     for i, fr in enumerate(frames):
-        if not isinstance(fr, dict):
-            continue
-        hands, pointables = _frame_hands(fr)
+        hands, pointables = fr["hands"], fr["pointables"]
         ids = [h.get("id") for h in hands if h.get("id") is not None]
         for hand_id in ids:
             together[hand_id].update(ids)
@@ -487,7 +521,7 @@ def read_leap_json(doc, name: str = "recording") -> LeapRecording:
     if version not in SUPPORTED_FORMATS:
         raise ValueError(f"{name}: Leap recording formatVersion {version!r} is not supported "
                          f"(supported: {', '.join(map(str, SUPPORTED_FORMATS))})")
-    frames = _unpack_v2(doc["frames"]) if version == 2 else doc["frames"]
+    frames = _checked_frames(_unpack_v2(doc["frames"]) if version == 2 else doc["frames"], name)
     if not frames:
         raise ValueError(f"{name}: the recording has no frames")
     notes = collections.Counter()
@@ -496,13 +530,11 @@ def read_leap_json(doc, name: str = "recording") -> LeapRecording:
     times, converted, rows = [], [], []
     for i, fr in enumerate(frames):
         where = f"{name}.frames[{i}]"
-        stamp = fr.get("timestamp") if isinstance(fr, dict) else None
-        if not isinstance(stamp, (int, float)) or not math.isfinite(stamp):
-            raise ValueError(f"{where}.timestamp: expected a number (microseconds), got {stamp!r}")
+        stamp = fr["timestamp"]
         if times and stamp * 1e-6 < times[-1]:
             notes["frames out of time order, dropped"] += 1
             continue
-        hands_in, pointables = _frame_hands(fr)
+        hands_in, pointables = fr["hands"], fr["pointables"]
         sides = _frame_sides(hands_in, pointables, known_sides, fitted, where, notes)
         hands, row = {}, np.full((3, 2), np.nan)
         for k, (hand, side) in enumerate(zip(hands_in, sides)):
@@ -518,8 +550,9 @@ def read_leap_json(doc, name: str = "recording") -> LeapRecording:
                 notes["rebuilt from the palm (no full skeleton)"] += 1
             hands[side] = adapted
             for r, key in enumerate(("grabStrength", "pinchStrength", "confidence")):
-                if isinstance(hand.get(key), (int, float)):
-                    row[r, 0 if side == "right" else 1] = float(hand[key])
+                value = hand.get(key)
+                if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+                    row[r, 0 if side == "right" else 1] = min(max(float(value), 0.0), 1.0)
         times.append(stamp * 1e-6)
         converted.append(hands)
         rows.append(row)
