@@ -82,6 +82,8 @@ class Motion:
     grab: Optional[np.ndarray] = None
     pinch: Optional[np.ndarray] = None
     source: str = ""
+    # what the adapter had to make up, {case: count} (adapters.leap.LeapRecording.notes)
+    notes: Dict[str, int] = dataclasses.field(default_factory=dict)
 
     def palms(self, side=None):
         return np.array([f[s].frame.palm_pose[:3] for f in self.frames for s in HANDS
@@ -89,7 +91,7 @@ class Motion:
 
 
 def motion_from_leap(leap) -> Motion:
-    return with_strengths(Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap"))
+    return with_strengths(Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap", dict(leap.notes)))
 
 
 def with_strengths(motion: Motion) -> Motion:
@@ -421,7 +423,7 @@ def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: S
             radii[i, h], valid[i, h] = f.radii, f.valid
     synthesized = sorted({n_ for f in motion.frames for a in f.values() for n_ in a.synthesized})
     info = {"source": motion.source, "name": motion.name, "translation": [float(v) for v in shift],
-            "placement": rule, "resampled_dt": dt, "synthesized_joints": synthesized}
+            "placement": rule, "resampled_dt": dt, "synthesized_joints": synthesized, "adapter_notes": motion.notes}
     return _rec.Recording(scene, params, _rec.world_def_to_dict(world_def or _core.WorldDef()),
                           [_rec.hand_def_to_dict(d) for d in hand_defs], np.full(n, dt), present, positions,
                           orientations, radii, valid, [], None, info)
@@ -624,7 +626,10 @@ def main(argv=None) -> int:
             if rec.info.get("placement"):
                 lines.append(f"  placement: {rec.info['placement']}; translation "
                              f"{np.round(rec.info['translation'], 4).tolist()} m")
+                lines.append(f"  input: {rec.info['source']}" + "".join(
+                    f"; {case}: {n}" for case, n in sorted(rec.info.get("adapter_notes", {}).items())))
             docs.append({**dataclasses.asdict(summary), "placement": rec.info.get("placement"),
+                         "source": rec.info.get("source"), "adapter_notes": rec.info.get("adapter_notes"),
                          "synthesized_joints": rec.info.get("synthesized_joints")})
         (args.out / f"{base}.txt").write_text("\n".join(lines) + "\n")
         if not args.json:

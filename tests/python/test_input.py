@@ -779,6 +779,7 @@ def test_replay_command_on_a_bvh_and_on_its_recording(tmp_path):
     assert (out / "close_free_box.png").stat().st_size > 10000
     summary = (out / "close.txt").read_text()
     assert "close on free_box: 38 steps" in summary and "all state finite: True" in summary
+    assert "input: bvh (grab and pinch of the right hand from the skeleton)" in summary
     assert replay.main([str(out / "close_free_box.npz"), "--out", str(out)]) == 0
     assert "state hashes match the recording: True" in (out / "close_free_box.txt").read_text()
 
