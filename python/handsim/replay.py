@@ -227,12 +227,16 @@ def _particles_by_frame(frames, hand_def, skip=()):
     for frame in frames:
         world.step(DT, [frame])
         q = np.asarray(world.hand_particles(hand)) if world.hand_tracked(hand) else np.zeros((0, 3))
-        if skip and len(q):
-            joints = np.asarray(frame.positions)
-            nearest = np.argmin(np.linalg.norm(q[:, None] - joints[None], axis=2), axis=1)
-            q = q[~np.isin(nearest, skip)]
-        points.append(q)
+        points.append(_without_nearest(q, frame, skip) if skip else q)
     return points, world.hand_model(hand).particle_radius
+
+
+def _without_nearest(q, frame, joints):
+    """The particles `q` of `frame` whose nearest joint is not one of `joints` (indices)."""
+    if not len(q):
+        return q
+    nearest = np.argmin(np.linalg.norm(q[:, None] - np.asarray(frame.positions)[None], axis=2), axis=1)
+    return q[~np.isin(nearest, joints)]
 
 
 def _gaps(q, r, centre, half):
@@ -354,10 +358,12 @@ def _grip_candidates(motion: Motion, side: str, pinch: bool, h: float, closures,
         # nor may the palm go through the cube on its way to the grip (from k0 to the grip's frame): the fingers
         # close around the cube; a hand that gets to its grip back first (e.g. palm down and rising while it
         # closes) would push the cube away before it
-        palm, radius = _particles_by_frame(frames, hand_def, not_palm)
+        every, radius = _particles_by_frame(frames, hand_def)
+        palm = [_without_nearest(qf, frame, not_palm) for qf, frame in zip(every, frames)]
         # how deep the closing hand (all of it) goes where the cube starts, from k0 until it is less than half
         # closed again: a hand that barely reaches it cannot be expected to grasp it
-        qc, rc = _particles(frames, hand_def)
+        qc = np.concatenate(every) if every else np.zeros((0, 3))
+        rc = np.full(len(qc), radius)
         for m, j in enumerate(closing):
             if j < k:
                 continue
