@@ -102,12 +102,13 @@ def _figure(path: Path, name: str, motion, runs):
     save_figure(fig, path, dpi=72)
 
 
-def replay_on_both_scenes(motion, name: str = "", hand_defs=None) -> list:
+def replay_on_both_scenes(motion, name: str = "", hand_defs=None, reach: float = _replay.REACH) -> list:
     """(recording, summary, store) of `motion` replayed near the jewelry box and near the free cube, in the
-    order expectations() takes them; `hand_defs` as for replay.session_from_motion (default hands if None)."""
+    order expectations() takes them; `hand_defs` and `reach` as for replay.session_from_motion (default hands
+    if None)."""
     runs = []
     for scene in ("jewelry_box", "free_box"):
-        rec = _replay.session_from_motion(motion, scene, hand_defs=hand_defs)
+        rec = _replay.session_from_motion(motion, scene, hand_defs=hand_defs, reach=reach)
         store = {}
         runs.append((rec, _replay.run(rec, name, motion=motion, store=store), store))
     return runs
@@ -159,7 +160,7 @@ def strength_agreement(motion: "_replay.Motion") -> dict:
     return out
 
 
-def run_all(assets: Path, img: Path = None) -> List[dict]:
+def run_all(assets: Path, img: Path = None, reach: float = _replay.REACH) -> List[dict]:
     rows = []
     for path in sorted(assets.glob("*.json.lz")):
         name = path.name.split(".")[0]
@@ -167,7 +168,7 @@ def run_all(assets: Path, img: Path = None) -> List[dict]:
         doc = read_leap_document(path)
         leap = read_leap_json(doc, name)
         motion = _replay.motion_from_leap(leap)
-        runs = replay_on_both_scenes(motion, name)
+        runs = replay_on_both_scenes(motion, name, reach=reach)
         if img is not None:
             _figure(img / f"input_{name}.png", name, motion, runs)
         checks = expectations(motion, runs[0][1], runs[1][1])
@@ -220,12 +221,19 @@ def main(argv=None) -> int:
     ap.add_argument("--assets", type=Path, default=default_assets(), help="folder of .json.lz recordings")
     ap.add_argument("--doc", type=Path, default=Path("docs/input.md"), help="doc whose results table to rewrite")
     ap.add_argument("--img", type=Path, default=Path("docs/img"), help="folder for the PNGs")
+    ap.add_argument("--reach", type=float, default=_replay.REACH,
+                    help=f"placement: the share of the cube's half extent the closing hand is to reach into it "
+                         f"(default {_replay.REACH}); another value prints the table only (a sensitivity run)")
     args = ap.parse_args(argv)
+    if not 0 < args.reach <= 2:
+        print(f"error: --reach: expected a share in (0, 2], got {args.reach}", file=sys.stderr)
+        return 2
+    sensitivity = args.reach != _replay.REACH
     if not args.assets.is_dir() or not list(args.assets.glob("*.json.lz")):
         print(f"error: --assets: no .json.lz recordings in {args.assets}", file=sys.stderr)
         return 2
     c0 = time.perf_counter()
-    rows = run_all(args.assets, args.img)
+    rows = run_all(args.assets, None if sensitivity else args.img, args.reach)
     text = table(rows) + "\n\nPictures: " + ", ".join(f"[{r['name']}](img/input_{r['name']}.png)" for r in rows)
     text += ("\n\nThe same hands as a Leap SDK before 2.0 sent them (`adapters.leap.without_skeleton`: no types, "
              "bone joints or strengths, no curled fingers), rebuilt from the palm, against the skeleton's joints "
@@ -237,7 +245,9 @@ def main(argv=None) -> int:
              f"{sum(not ok for r in rows for ok in r['checks'].values())} not met; "
              f"{time.perf_counter() - c0:.0f} s wall for the whole run.")
     print(text)
-    if args.doc.is_file():
+    if sensitivity:
+        print(f"--reach {args.reach}: {args.doc} and the pictures are left as they are")
+    elif args.doc.is_file():
         doc = args.doc.read_text()
         if BEGIN in doc and END in doc:
             a, b = doc.index(BEGIN) + len(BEGIN), doc.index(END)

@@ -279,15 +279,16 @@ def _grip(frame, pinch: bool) -> np.ndarray:
     return 0.5 * (p[_core.PALM] + p[[_core.INDEX_TIP, _core.MIDDLE_TIP, _core.RING_TIP, _core.LITTLE_TIP]].mean(axis=0))
 
 
-def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict, str):
-    """The free_box scene parameters for this motion (see the module docstring) and the rule used."""
+def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None, reach: float = REACH) -> (dict, str):
+    """The free_box scene parameters for this motion (see the module docstring) and the rule used; `reach`:
+    the share of the cube's half extent the closing hand is to reach into it."""
     h = _scenes.FREE_BOX_DEFAULTS["half_extent"]
     closing = closing_hand(motion)
     if closing is not None:
         side = closing[0]
         hand_def = next((d for d in (hand_defs or []) if d.handedness.name.lower() == side),
                         _core.HandDef(handedness=_core.Handedness.RIGHT if side == "right" else _core.Handedness.LEFT))
-        centre, h, rule = _cube_for_closing_hand(motion, closing, hand_def)
+        centre, h, rule = _cube_for_closing_hand(motion, closing, hand_def, reach)
         centre = centre + shift
         return {"position": [float(centre[0]), float(centre[1] - h), float(centre[2])], "half_extent": h}, rule
     side = next((s for s in HANDS if len(motion.palms(s))), None)
@@ -302,7 +303,7 @@ def free_box_params(motion: Motion, shift: np.ndarray, hand_defs=None) -> (dict,
             f"no closing hand: cube under the {side} hand's mean palm, top {BRUSH * 100:.0f} cm above its lowest joint")
 
 
-def _cube_for_closing_hand(motion: Motion, closing, hand_def) -> (np.ndarray, float, str):
+def _cube_for_closing_hand(motion: Motion, closing, hand_def, reach: float = REACH) -> (np.ndarray, float, str):
     """Centre (motion coordinates), half extent and description of the cube the closing hand is to grasp."""
     side, kind, strength = closing
     pinch = kind == "pinch"
@@ -317,7 +318,7 @@ def _cube_for_closing_hand(motion: Motion, closing, hand_def) -> (np.ndarray, fl
     # after the hand half closed in confidence-demo); for a pinch it lost pinch-half-res's grasp; and finding
     # it takes every grip (about 10 s for confidence-demo's 271). The first deep enough grip leaves every
     # placement whose first grip was reached as it was.
-    need = REACH * h
+    need = reach * h
     tried = []
     for candidate in _grip_candidates(motion, side, pinch, h, closures, hand_def):
         tried.append(candidate)
@@ -394,14 +395,15 @@ def hand_strength(motion: Motion, side: str, frame: int) -> float:
 
 
 def session_from_motion(motion: Motion, scene: str, dt: float = DT, hand_defs: Sequence = None,
-                        world_def=None) -> _rec.Recording:
-    """A handsim Recording of `motion` on `scene` (placement and resampling of the module docstring)."""
+                        world_def=None, reach: float = REACH) -> _rec.Recording:
+    """A handsim Recording of `motion` on `scene` (placement and resampling of the module docstring; `reach`
+    as for free_box_params)."""
     if hand_defs is None:
         hand_defs = [_core.HandDef(handedness=_core.Handedness.RIGHT), _core.HandDef(handedness=_core.Handedness.LEFT)]
     shift = placement(motion)
     params, rule = {}, "default jewelry box"
     if scene == "free_box":
-        params, rule = free_box_params(motion, shift, hand_defs)
+        params, rule = free_box_params(motion, shift, hand_defs, reach)
     elif scene != "jewelry_box":
         raise ValueError(f"scene: expected 'jewelry_box' or 'free_box' for tracker input, got {scene!r}")
     pose = np.array([*shift, 0, 0, 0, 1.0])

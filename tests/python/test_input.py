@@ -784,6 +784,16 @@ def test_replay_command_on_a_bvh_and_on_its_recording(tmp_path):
     assert "state hashes match the recording: True" in (out / "close_free_box.txt").read_text()
 
 
+def test_input_report_arguments(tmp_path, capsys):
+    """The report refuses a folder without recordings and a depth share outside (0, 2], naming the option."""
+    from handsim import input_report
+    assert input_report.main(["--assets", str(tmp_path)]) == 2
+    assert "--assets: no .json.lz recordings" in capsys.readouterr().err
+    (tmp_path / "x.json.lz").write_text("{}")
+    assert input_report.main(["--assets", str(tmp_path), "--reach", "0"]) == 2
+    assert "--reach: expected a share in (0, 2]" in capsys.readouterr().err
+
+
 def test_a_leap_recording_without_any_hand_replays_and_grasps_nothing():
     """A tracker left running with nobody in front of it: no error, nothing grasped, every check met."""
     from handsim import input_report
