@@ -313,11 +313,9 @@ def _cube_for_closing_hand(motion: Motion, closing, hand_def, reach: float = REA
     # The first grip (in time order) that the closing hand reaches REACH deep into wins. The grip of the first
     # half-closed frame may be out of the fist's way, e.g. when the hand rises while it closes (confidence2); a
     # later grip of the same closure lies where the fist went. Not the deepest grip: reach saturates near the
-    # cube's centre, so the deepest wins by fractions of a mm (in whole mm another grip wins in
-    # confidence-demo-eighth-res, and an open hand grasps that cube); it often lies late in a long hold (1.2 s
-    # after the hand half closed in confidence-demo); for a pinch it lost pinch-half-res's grasp; and finding
-    # it takes every grip (about 10 s for confidence-demo's 271). The first deep enough grip leaves every
-    # placement whose first grip was reached as it was.
+    # cube's centre, so the deepest wins by fractions of a mm, often lies late in a long hold, and finding it
+    # takes every grip. The first deep enough grip leaves every placement whose first grip was reached as it
+    # was.
     need = reach * h
     tried = []
     for candidate in _grip_candidates(motion, side, pinch, h, closures, hand_def):
