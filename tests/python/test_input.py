@@ -528,6 +528,9 @@ def test_mediapipe_landmarks_give_the_pose(name, coordinates):
     given = mediapipe.LANDMARK_TO_JOINT
     np.testing.assert_allclose(np.asarray(a.frame.positions)[given], np.asarray(f.positions)[given], atol=1e-9)
     np.testing.assert_allclose(flexion_deg(a.frame)[FLEX], flexion_deg(f)[FLEX], atol=1e-6)
+    # the knuckles bend on the synthesized metacarpals: make_hand_frame's bases lie off the wrist-knuckle line
+    knuckles = [handsim.INDEX_PROXIMAL, handsim.MIDDLE_PROXIMAL, handsim.RING_PROXIMAL, handsim.LITTLE_PROXIMAL]
+    assert np.abs(flexion_deg(a.frame) - flexion_deg(f))[knuckles].max() < 10.5
     # finger frames match make_hand_frame's; thumb frames only up to the roll about the bone
     q, r = np.asarray(a.frame.orientations), np.asarray(f.orientations)
     angle = np.degrees(2 * np.arccos(np.clip(np.abs((q * r).sum(axis=1)), 0, 1)))
