@@ -21,6 +21,7 @@ from . import _core
 from . import render as _render
 from . import replay as _replay
 from .plots import save_figure
+from .adapters import skeleton as _sk
 from .adapters.leap import fit_side, read_leap_document, read_leap_json, without_skeleton
 
 BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
@@ -160,6 +161,34 @@ def strength_agreement(motion: "_replay.Motion") -> dict:
     return out
 
 
+def strength_calibration(rows) -> str:
+    """The ranges of the skeleton's closure measures (adapters.skeleton.closure_measures) over every hand of
+    every recording, where Leap called it open or closed (grab <= OPEN or >= CLOSED) and not pinching or
+    pinching (pinch <= OPEN or >= CLOSED): what GRAB_FLEXION and PINCH_GAP_M were set between."""
+    flex = {"open": [], "closed": []}
+    gap = {"open": [], "pinching": []}
+    for r in rows:
+        leap = r["leap"]
+        for i, f in enumerate(leap.frames):
+            for side, a in f.items():
+                col = 0 if side == "right" else 1
+                share, tips = _sk.closure_measures(a.frame)
+                g, p = leap.grab[i, col], leap.pinch[i, col]
+                for store, key, value, low, high in ((flex, ("open", "closed"), share, g, g),
+                                                     (gap, ("open", "pinching"), tips, p, p)):
+                    if low <= _replay.OPEN:
+                        store[key[0]].append(value)
+                    elif high >= _replay.CLOSED:
+                        store[key[1]].append(value)
+    span = lambda v, scale=1.0, digits=2: f"{scale * min(v):.{digits}f}–{scale * max(v):.{digits}f}" if v else "–"
+    return (f"Skeleton closure measures where Leap's strengths are decided (grab or pinch ≤ {_replay.OPEN} or "
+            f"≥ {_replay.CLOSED}), every hand of every recording: flexion share open {span(flex['open'])}, "
+            f"closed {span(flex['closed'])} (grab from the skeleton: {_sk.GRAB_FLEXION[0]} → 0, "
+            f"{_sk.GRAB_FLEXION[1]} → 1); thumb–index gap not pinching {span(gap['open'], 1000, 0)} mm, pinching "
+            f"{span(gap['pinching'], 1000, 0)} mm (pinch: {1000 * _sk.PINCH_GAP_M[0]:.0f} mm → 0, "
+            f"{1000 * _sk.PINCH_GAP_M[1]:.0f} mm → 1).")
+
+
 def run_all(assets: Path, img: Path = None, reach: float = _replay.REACH) -> List[dict]:
     rows = []
     for path in sorted(assets.glob("*.json.lz")):
@@ -241,6 +270,7 @@ def main(argv=None) -> int:
              "frame: the finger fit, where at least 3 fingers are reported, and the device side alone); "
              "and the closing hand from Leap's strengths and from the skeleton's (`replay.with_strengths`; a "
              "formatVersion 2 file is not stripped):\n\n" + rebuild_table(rows))
+    text += "\n\n" + strength_calibration(rows)
     text += (f"\n\n{len(rows)} recordings, {sum(len(r['checks']) for r in rows)} checks, "
              f"{sum(not ok for r in rows for ok in r['checks'].values())} not met; "
              f"{time.perf_counter() - c0:.0f} s wall for the whole run.")

@@ -250,30 +250,34 @@ def joint_angles(frame) -> np.ndarray:
 
 # Closure strengths from the skeleton, for trackers that give none (BVH, Leap before 2.0), calibrated on the
 # development Leap recordings against Leap's own strengths (`python -m handsim.input_report` prints the
-# agreement): the mean flexion of the index..little finger joints, as a share of make_hand_frame's fist, was
-# at most 0.31 in every frame Leap called open (grab <= 0.05) and 0.43 or more in frames it called closed
-# (>= 0.95); the thumb and index tips were 55 mm or more apart whenever Leap's pinch was <= 0.05 and 8-24 mm
-# apart whenever it was >= 0.95.
-GRAB_FLEXION = (0.32, 0.45)   # share of the fist's flexion mapped to grab 0 .. 1
+# calibration and the agreement): Leap's open and closed hands, and its pinching and open thumb-index gaps,
+# fall on either side of these ranges.
+GRAB_FLEXION = (0.32, 0.45)   # closure_measures' flexion share mapped to grab 0 .. 1
 PINCH_GAP_M = (0.055, 0.025)  # thumb-index tip distance mapped to pinch 0 .. 1
 _FLEXING = [JOINT[f + "_" + b] for f in FINGERS for b in ("proximal", "intermediate", "distal")]
 _FIST_FLEXION = None
 
 
-def closure_strengths(frame) -> Tuple[float, float]:
-    """(grab, pinch) in 0..1 of a hand frame, as Leap's grabStrength and pinchStrength would roughly say
-    (see GRAB_FLEXION, PINCH_GAP_M); NaN for an untracked frame or one without those joints."""
+def closure_measures(frame) -> Tuple[float, float]:
+    """(flexion share, thumb-index gap m) of a hand frame: the mean flexion of the index..little finger joints
+    as a share of make_hand_frame's fist's, and the distance between the thumb and index tips; NaN where the
+    joints are invalid."""
     global _FIST_FLEXION
     if _FIST_FLEXION is None:
         _FIST_FLEXION = float(np.mean(joint_angles(_core.make_hand_frame(_core.Handedness.RIGHT, curl=1.0))[_FLEXING]))
     flexion = float(np.mean(joint_angles(frame)[_FLEXING])) / _FIST_FLEXION
-    lo, hi = GRAB_FLEXION
-    grab = float(np.clip((flexion - lo) / (hi - lo), 0, 1)) if np.isfinite(flexion) else math.nan
     p, v = np.asarray(frame.positions), np.asarray(frame.valid)
-    if v[_core.THUMB_TIP] and v[_core.INDEX_TIP]:
-        gap = float(np.linalg.norm(p[_core.THUMB_TIP] - p[_core.INDEX_TIP]))
-        far, near = PINCH_GAP_M
-        pinch = float(np.clip((far - gap) / (far - near), 0, 1))
-    else:
-        pinch = math.nan
+    gap = float(np.linalg.norm(p[_core.THUMB_TIP] - p[_core.INDEX_TIP])) if v[_core.THUMB_TIP] and v[_core.INDEX_TIP] \
+        else math.nan
+    return flexion, gap
+
+
+def closure_strengths(frame) -> Tuple[float, float]:
+    """(grab, pinch) in 0..1 of a hand frame, as Leap's grabStrength and pinchStrength would roughly say
+    (see GRAB_FLEXION, PINCH_GAP_M); NaN for an untracked frame or one without those joints."""
+    flexion, gap = closure_measures(frame)
+    lo, hi = GRAB_FLEXION
+    far, near = PINCH_GAP_M
+    grab = float(np.clip((flexion - lo) / (hi - lo), 0, 1)) if np.isfinite(flexion) else math.nan
+    pinch = float(np.clip((far - gap) / (far - near), 0, 1)) if np.isfinite(gap) else math.nan
     return grab, pinch
