@@ -405,6 +405,19 @@ def test_real_hands_without_their_skeleton_are_rebuilt_near_it(name, leap_record
         assert max(e["tip_median_mm"]) < 75 and np.median(e["tip_median_mm"]) < 45, e
 
 
+@pytest.mark.parametrize("name", sorted(README_COUNTS))
+def test_the_thumb_tells_the_side_of_every_development_hand(name, leap_recordings):
+    """adapters.leap.thumb_side, the first rule for a hand without a type, against the type of every hand of
+    every frame of a development recording."""
+    from handsim.adapters.leap import read_leap_document, thumb_side
+    dev_recording(leap_recordings, name)  # skips when the folder holds other recordings
+    where = shared("leap_recordings") / f"{name}.json.lz"
+    doc = read_leap_document(where)
+    frames = leap._unpack_v2(doc["frames"]) if doc["metadata"]["formatVersion"] == 2 else doc["frames"]
+    hands = [(h, [p for p in fr["pointables"] if p["handId"] == h["id"]]) for fr in frames for h in fr["hands"]]
+    assert hands and all(thumb_side(h, own) == h["type"] for h, own in hands)
+
+
 def test_pinch_half_res_is_every_second_frame_of_pinch(leap_recordings):
     full, half = dev_recording(leap_recordings, "pinch"), dev_recording(leap_recordings, "pinch-half-res")
     for i in (0, 40, 153):

@@ -143,8 +143,8 @@ def _typed_fingers(pointables) -> Dict[int, dict]:
 
 def thumb_side(hand: dict, pointables, where: str = "hand") -> Optional[str]:
     """"right" or "left" from where the thumb is (a right thumb lies on +(direction x palmNormal) of the palm:
-    19.8 mm or more in every right-hand frame of the development recordings, -41 mm or less in every left-hand
-    one); None without a typed thumb with a pipPosition and the palm's axes."""
+    it tells the type of every hand of every development recording, test_input checks); None without a typed
+    thumb with a pipPosition and the palm's axes."""
     thumb = _typed_fingers(pointables).get(0)
     axes, palm = _palm_axes(hand, where), _vec(hand, "palmPosition", where)
     pip = None if thumb is None else _vec(thumb, "pipPosition", f"{where}.pointables[type 0]")
