@@ -117,6 +117,11 @@ def _vec(obj, key, where):
     return a
 
 
+def _finite_number(v) -> Optional[float]:
+    """v as a float when it is a finite JSON number (not a bool), else None."""
+    return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) else None
+
+
 def _palm_axes(hand: dict, where: str):
     """Unit (direction, palmNormal, direction x palmNormal) of a Leap hand, the normal made orthogonal to the
     direction; None when either is missing or degenerate."""
@@ -135,8 +140,8 @@ def _typed_fingers(pointables) -> Dict[int, dict]:
     """{finger type 0..4: pointable} of the pointables that say their type (the first of each type)."""
     out = {}
     for p in pointables:
-        t = p.get("type")
-        if isinstance(t, (int, float)) and math.isfinite(t) and int(t) == t and 0 <= t < 5 and int(t) not in out:
+        t = _finite_number(p.get("type"))
+        if t is not None and t in (0, 1, 2, 3, 4) and int(t) not in out:
             out[int(t)] = p
     return out
 
@@ -356,8 +361,8 @@ def _palm_frame(hand: dict, pointables, fingers: Dict[int, dict], handedness, wh
     # curled fully when it reports none
     grab = hand.get("grabStrength")
     seen = [fit[0] for t, fit in fits.items() if t > 0]
-    if isinstance(grab, (int, float)) and math.isfinite(grab):
-        unseen = float(np.clip(grab, 0, 1))
+    if _finite_number(grab) is not None:
+        unseen = min(max(float(grab), 0.0), 1.0)
     else:
         unseen = float(np.mean(seen)) if seen else 1.0
     extra = {} if 0 not in fits else {"thumb_opposition": fits[0][1]}
@@ -425,7 +430,7 @@ def _checked_frames(frames, name: str) -> List[dict]:
         if not isinstance(fr, dict):
             raise ValueError(f"{where}: expected an object, got {type(fr).__name__}")
         stamp = fr.get("timestamp")
-        if isinstance(stamp, bool) or not isinstance(stamp, (int, float)) or not math.isfinite(stamp):
+        if _finite_number(stamp) is None:
             raise ValueError(f"{where}.timestamp: expected a number (microseconds), got {stamp!r}")
         lists = {}
         for key in ("hands", "pointables"):
@@ -551,7 +556,7 @@ def read_leap_json(doc, name: str = "recording") -> LeapRecording:
             hands[side] = adapted
             for r, key in enumerate(("grabStrength", "pinchStrength", "confidence")):
                 value = hand.get(key)
-                if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+                if _finite_number(value) is not None:
                     row[r, 0 if side == "right" else 1] = min(max(float(value), 0.0), 1.0)
         times.append(stamp * 1e-6)
         converted.append(hands)
