@@ -1,0 +1,582 @@
+/* A Godot 3 GDNative NativeScript class, HandsimWorld (a Reference), over handsim's C ABI. It builds the default
+ * jewelry box and one hand per hand of a recorded session (a frame stream, python/handsim/frame_stream.py), steps
+ * one recorded frame per call, checks each step's state hash against the recorded one, and hands Godot what it
+ * draws: body transforms and the skinned hand mesh (PoolVector3Array straight from
+ * handsim_hand_render_vertices_f32, since Godot's Vector3 is three floats).
+ *
+ * Godot and handsim share axes and units (right-handed, Y up, metres), so nothing is converted except the
+ * triangle winding: handsim's triangles are counter-clockwise from outside, Godot's front faces clockwise.
+ *
+ * Every method checks its arguments; a bad one returns nil/false, prints a Godot error and keeps the message for
+ * last_error(), starting with the argument's name, as the C ABI does. Nothing here can crash Godot on bad input. */
+#include <gdnative_api_struct.gen.h>
+#include <handsim.h>
+
+#include <inttypes.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* The three entry points Godot looks up; everything else stays hidden (-fvisibility=hidden). */
+#define ENTRY GDN_EXPORT __attribute__((visibility("default")))
+
+#define CLASS_NAME "HandsimWorld"
+#define MAX_HANDS 8
+#define MAX_STEPS 10000000u /* 46 h at 60 Hz: far beyond any session, small enough to bound the allocation */
+#define MAX_EVENTS 64
+
+static const godot_gdnative_core_api_struct* api;
+static const godot_gdnative_ext_nativescript_api_struct* nativescript;
+
+/* The frame stream's sizes (frame_stream.py's layout, version 1). */
+enum { HEADER_BYTES = 24, JOINT_BYTES = 72, HAND_BYTES = 8 + HANDSIM_HAND_JOINT_COUNT * JOINT_BYTES, STEP_HEAD = 16 };
+
+typedef struct {
+  handsim_world* world;
+  handsim_jewelry_box box;
+  int32_t hand_count;
+  int32_t handedness[MAX_HANDS];
+  handsim_hand_id hands[MAX_HANDS];
+  unsigned char* steps; /* step_count records of step_bytes */
+  uint32_t step_count, step_bytes, next;
+  int64_t first_mismatch; /* first step whose hash differs from the recorded one; -1: none */
+  handsim_joint_pose joints[MAX_HANDS][HANDSIM_HAND_JOINT_COUNT];
+  float* vertices; /* scratch for normals */
+  int32_t vertex_capacity;
+  char error[512];
+} Instance;
+
+/* ---- small helpers ------------------------------------------------------------------------------------------ */
+
+static void fail(Instance* self, const char* format, ...) {
+  va_list args;
+  va_start(args, format);
+  vsnprintf(self->error, sizeof self->error, format, args);
+  va_end(args);
+  api->godot_print_error(self->error, CLASS_NAME, __FILE__, __LINE__);
+}
+
+/* A failed C ABI call: the library's message (it names the argument) prefixed with the call. */
+static int check(Instance* self, int status, const char* call) {
+  if (status != HANDSIM_OK) fail(self, "%s: %s (%s)", call, handsim_last_error(), handsim_status_name(status));
+  return status == HANDSIM_OK;
+}
+
+static godot_variant nil(void) {
+  godot_variant v;
+  api->godot_variant_new_nil(&v);
+  return v;
+}
+static godot_variant boolean(int b) {
+  godot_variant v;
+  api->godot_variant_new_bool(&v, b ? 1 : 0);
+  return v;
+}
+static godot_variant integer(int64_t i) {
+  godot_variant v;
+  api->godot_variant_new_int(&v, i);
+  return v;
+}
+static godot_variant real(double d) {
+  godot_variant v;
+  api->godot_variant_new_real(&v, d);
+  return v;
+}
+static godot_variant text(const char* s) {
+  godot_string str = api->godot_string_chars_to_utf8(s);
+  godot_variant v;
+  api->godot_variant_new_string(&v, &str);
+  api->godot_string_destroy(&str);
+  return v;
+}
+static void dict_set(godot_dictionary* d, const char* key, godot_variant value) {
+  godot_variant k = text(key);
+  api->godot_dictionary_set(d, &k, &value);
+  api->godot_variant_destroy(&k);
+  api->godot_variant_destroy(&value);
+}
+
+static int args_ok(Instance* self, const char* method, int count, int expected) {
+  if (count != expected) fail(self, "%s: takes %d argument(s), got %d", method, expected, count);
+  return count == expected;
+}
+
+/* args[i] as a hand index: an int naming one of the session's hands. */
+static int hand_arg(Instance* self, const char* method, godot_variant** args, int32_t* out) {
+  if (api->godot_variant_get_type(args[0]) != GODOT_VARIANT_TYPE_INT) {
+    fail(self, "%s: hand: must be an int (a hand index)", method);
+    return 0;
+  }
+  int64_t i = api->godot_variant_as_int(args[0]);
+  if (!self->world || i < 0 || i >= self->hand_count) {
+    fail(self, "%s: hand: must be 0..%d (the session's hands), got %" PRId64, method, self->hand_count - 1, i);
+    return 0;
+  }
+  *out = (int32_t)i;
+  return 1;
+}
+
+static uint32_t u32_at(const unsigned char* p) {
+  return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* ---- the session ------------------------------------------------------------------------------------------- */
+
+static void close_session(Instance* self) {
+  handsim_world_destroy(self->world); /* NULL is a no-op */
+  free(self->steps);
+  self->world = NULL;
+  self->steps = NULL;
+  self->hand_count = 0;
+  self->step_count = self->next = 0;
+  self->first_mismatch = -1;
+}
+
+/* Reads the whole file; its size must be exactly what the header says (a truncated copy is an error). */
+static int read_stream(Instance* self, const char* path, unsigned char** out, long* size) {
+  FILE* f = fopen(path, "rb");
+  if (!f) {
+    fail(self, "open: path: cannot open '%s'", path);
+    return 0;
+  }
+  int ok = fseek(f, 0, SEEK_END) == 0 && (*size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0;
+  *out = ok ? malloc(*size > 0 ? (size_t)*size : 1) : NULL;
+  ok = ok && *out && fread(*out, 1, (size_t)*size, f) == (size_t)*size;
+  fclose(f);
+  if (!ok) {
+    free(*out);
+    fail(self, "open: path: cannot read '%s'", path);
+  }
+  return ok;
+}
+
+static int parse_header(Instance* self, const unsigned char* data, long size, const char* path) {
+  if (size < HEADER_BYTES || memcmp(data, "HSFRAMES", 8) != 0) {
+    fail(self, "open: path: '%s' is not a handsim frame stream (no HSFRAMES magic)", path);
+    return 0;
+  }
+  uint32_t version = u32_at(data + 8), hands = u32_at(data + 12), steps = u32_at(data + 16),
+           joints = u32_at(data + 20);
+  if (version != 1 || joints != HANDSIM_HAND_JOINT_COUNT) {
+    fail(self, "open: path: frame stream version %u with %u joints; this host reads version 1 with %d", version,
+         joints, HANDSIM_HAND_JOINT_COUNT);
+    return 0;
+  }
+  if (hands < 1 || hands > MAX_HANDS || steps > MAX_STEPS) {
+    fail(self, "open: path: %u hands and %u steps; this host takes 1..%d hands and at most %u steps", hands, steps,
+         MAX_HANDS, MAX_STEPS);
+    return 0;
+  }
+  uint64_t step_bytes = STEP_HEAD + (uint64_t)hands * HAND_BYTES;
+  uint64_t expected = HEADER_BYTES + 4u * hands + steps * step_bytes;
+  if ((uint64_t)size != expected) {
+    fail(self, "open: path: '%s' has %ld bytes, expected %" PRIu64 " for %u hand(s) and %u step(s)", path, size,
+         expected, hands, steps);
+    return 0;
+  }
+  for (uint32_t h = 0; h < hands; ++h) {
+    uint32_t side = u32_at(data + HEADER_BYTES + 4 * h);
+    if (side != HANDSIM_LEFT && side != HANDSIM_RIGHT) {
+      fail(self, "open: path: hand %u has handedness %u, expected 0 (left) or 1 (right)", h, side);
+      return 0;
+    }
+    self->handedness[h] = (int32_t)side;
+  }
+  self->hand_count = (int32_t)hands;
+  self->step_count = steps;
+  self->step_bytes = (uint32_t)step_bytes;
+  return 1;
+}
+
+/* The default world, the default jewelry box, and the session's hands with default HandDefs: what the stream's
+ * writer requires of the recording, so that this world is the recorded one. */
+static int build_world(Instance* self) {
+  if (!check(self, handsim_world_create(NULL, &self->world), "handsim_world_create")) return 0;
+  if (!check(self, handsim_build_jewelry_box(self->world, NULL, &self->box), "handsim_build_jewelry_box")) return 0;
+  for (int32_t h = 0; h < self->hand_count; ++h) {
+    handsim_hand_def def;
+    handsim_hand_def_default(&def);
+    def.handedness = self->handedness[h];
+    if (!check(self, handsim_add_hand(self->world, &def, &self->hands[h]), "handsim_add_hand")) return 0;
+  }
+  return 1;
+}
+
+static godot_variant m_open(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  if (!args_ok(self, "open", n, 1)) return boolean(0);
+  if (api->godot_variant_get_type(args[0]) != GODOT_VARIANT_TYPE_STRING) {
+    fail(self, "open: path: must be a String (an absolute file path: ProjectSettings.globalize_path)");
+    return boolean(0);
+  }
+  close_session(self);
+  godot_string path = api->godot_variant_as_string(args[0]);
+  godot_char_string utf8 = api->godot_string_utf8(&path);
+  const char* p = api->godot_char_string_get_data(&utf8);
+  unsigned char* data = NULL;
+  long size = 0;
+  int ok = read_stream(self, p, &data, &size) && parse_header(self, data, size, p);
+  if (ok) {
+    size_t body = (size_t)self->step_count * self->step_bytes;
+    self->steps = malloc(body > 0 ? body : 1);
+    ok = self->steps != NULL;
+    if (ok) memcpy(self->steps, data + HEADER_BYTES + 4 * self->hand_count, body);
+    else fail(self, "open: out of memory for %u steps", self->step_count);
+  }
+  free(data);
+  api->godot_char_string_destroy(&utf8);
+  api->godot_string_destroy(&path);
+  ok = ok && build_world(self);
+  if (!ok) close_session(self);
+  return boolean(ok);
+}
+
+/* Unpacks a recorded step into the joints and frames handsim_step takes; returns the number of frames: hands
+ * after the last present one get none, absent ones before it an untracked frame (every joint invalid). */
+static int32_t unpack_step(Instance* self, const unsigned char* rec, handsim_hand_frame* frames) {
+  int32_t count = 0;
+  for (int32_t h = 0; h < self->hand_count; ++h) {
+    const unsigned char* hand = rec + STEP_HEAD + (size_t)h * HAND_BYTES;
+    int present = u32_at(hand) != 0;
+    memcpy(self->joints[h], hand + 8, sizeof self->joints[h]); /* the record is handsim_joint_pose, byte for byte */
+    for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) {
+      if (!present) self->joints[h][j].valid = 0;
+      self->joints[h][j].reserved = 0;
+    }
+    frames[h].handedness = self->handedness[h];
+    frames[h].joint_count = HANDSIM_HAND_JOINT_COUNT;
+    frames[h].joints = self->joints[h];
+    if (present) count = h + 1;
+  }
+  return count;
+}
+
+static godot_variant m_step_next(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md, (void)args;
+  Instance* self = ud;
+  if (!args_ok(self, "step_next", n, 0)) return boolean(0);
+  if (!self->world) {
+    fail(self, "step_next: no session is open (call open(path) first)");
+    return boolean(0);
+  }
+  if (self->next >= self->step_count) return boolean(0); /* the end: not an error */
+  const unsigned char* rec = self->steps + (size_t)self->next * self->step_bytes;
+  double dt;
+  uint64_t recorded, hash;
+  memcpy(&dt, rec, 8);
+  memcpy(&recorded, rec + 8, 8);
+  handsim_hand_frame frames[MAX_HANDS];
+  int32_t count = unpack_step(self, rec, frames);
+  if (!check(self, handsim_step(self->world, dt, frames, count), "handsim_step")) return boolean(0);
+  handsim_state_hash(self->world, &hash);
+  if (hash != recorded && self->first_mismatch < 0) self->first_mismatch = self->next;
+  self->next++;
+  return boolean(1);
+}
+
+/* ---- queries ------------------------------------------------------------------------------------------------ */
+
+static godot_variant m_last_error(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  return text(((Instance*)ud)->error);
+}
+static godot_variant m_step_count(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  return integer(((Instance*)ud)->step_count);
+}
+static godot_variant m_step_index(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  return integer(((Instance*)ud)->next);
+}
+static godot_variant m_hand_count(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  return integer(((Instance*)ud)->hand_count);
+}
+static godot_variant m_first_mismatch(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  return integer(((Instance*)ud)->first_mismatch);
+}
+
+/* The hash as "0x%016x" text: Godot's int is signed 64-bit, and the hosts compare hashes as this text. */
+static godot_variant m_state_hash(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  Instance* self = ud;
+  uint64_t hash = 0;
+  if (!self->world) return text("");
+  handsim_state_hash(self->world, &hash);
+  char buf[24];
+  snprintf(buf, sizeof buf, "0x%016" PRIx64, hash);
+  return text(buf);
+}
+
+static godot_variant m_lid_angle(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)n, (void)a;
+  Instance* self = ud;
+  handsim_joint_state state;
+  if (!self->world || !check(self, handsim_get_joint_state(self->world, self->box.hinge, &state), "lid_angle"))
+    return real(0.0);
+  return real(state.value);
+}
+
+static godot_variant transform_of(const handsim_pose* p) {
+  godot_quat q;
+  godot_basis basis;
+  godot_vector3 origin;
+  godot_transform t;
+  api->godot_quat_new(&q, (godot_real)p->orientation.x, (godot_real)p->orientation.y, (godot_real)p->orientation.z,
+                      (godot_real)p->orientation.w);
+  api->godot_basis_new_with_euler_quat(&basis, &q);
+  api->godot_vector3_new(&origin, (godot_real)p->position.x, (godot_real)p->position.y, (godot_real)p->position.z);
+  api->godot_transform_new(&t, &basis, &origin);
+  godot_variant v;
+  api->godot_variant_new_transform(&v, &t);
+  return v;
+}
+
+/* {"base": {"transform": Transform, "half_extents": Vector3}, "lid": ..., "table": ...} of the box's bodies. */
+static godot_variant m_bodies(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)a;
+  Instance* self = ud;
+  if (!args_ok(self, "bodies", n, 0) || !self->world) return nil();
+  const char* names[3] = {"table", "base", "lid"};
+  handsim_body_id ids[3] = {self->box.table, self->box.base, self->box.lid};
+  godot_dictionary out;
+  api->godot_dictionary_new(&out);
+  for (int i = 0; i < 3; ++i) {
+    handsim_pose pose;
+    handsim_body_info info;
+    if (ids[i] == 0) continue; /* no table */
+    if (!check(self, handsim_body_pose(self->world, ids[i], &pose), "bodies") ||
+        !check(self, handsim_get_body_info(self->world, ids[i], &info), "bodies"))
+      continue;
+    godot_dictionary body;
+    godot_vector3 half;
+    godot_variant half_v, body_v;
+    api->godot_dictionary_new(&body);
+    dict_set(&body, "transform", transform_of(&pose));
+    api->godot_vector3_new(&half, (godot_real)info.half_extents.x, (godot_real)info.half_extents.y,
+                           (godot_real)info.half_extents.z);
+    api->godot_variant_new_vector3(&half_v, &half);
+    dict_set(&body, "half_extents", half_v);
+    api->godot_variant_new_dictionary(&body_v, &body);
+    api->godot_dictionary_destroy(&body);
+    dict_set(&out, names[i], body_v);
+  }
+  godot_variant v;
+  api->godot_variant_new_dictionary(&v, &out);
+  api->godot_dictionary_destroy(&out);
+  return v;
+}
+
+/* The grasp and contact events of the last step: [{"type": "grasp_begin", "hand": 0, "body": "lid"}, ...]. */
+static godot_variant m_events(godot_object* o, void* md, void* ud, int n, godot_variant** a) {
+  (void)o, (void)md, (void)a;
+  Instance* self = ud;
+  static const char* types[] = {"contact_begin", "contact_end", "grasp_begin", "grasp_end"};
+  handsim_event events[MAX_EVENTS];
+  int32_t count = 0;
+  godot_array out;
+  api->godot_array_new(&out);
+  if (args_ok(self, "events", n, 0) && self->world &&
+      check(self, handsim_events(self->world, events, MAX_EVENTS, &count), "events")) {
+    for (int32_t i = 0; i < count; ++i) {
+      godot_dictionary e;
+      api->godot_dictionary_new(&e);
+      int32_t t = events[i].type;
+      dict_set(&e, "type", text(t >= 0 && t < 4 ? types[t] : "unknown"));
+      int32_t hand = -1;
+      for (int32_t h = 0; h < self->hand_count; ++h)
+        if (self->hands[h] == events[i].hand) hand = h;
+      dict_set(&e, "hand", integer(hand));
+      const handsim_body_id b = events[i].body;
+      dict_set(&e, "body", text(b == self->box.lid ? "lid" : b == self->box.base ? "base"
+                                : b == self->box.table && b != 0 ? "table" : "other"));
+      godot_variant ev;
+      api->godot_variant_new_dictionary(&ev, &e);
+      api->godot_dictionary_destroy(&e);
+      api->godot_array_append(&out, &ev);
+      api->godot_variant_destroy(&ev);
+    }
+  }
+  godot_variant v;
+  api->godot_variant_new_array(&v, &out);
+  api->godot_array_destroy(&out);
+  return v;
+}
+
+/* Skinned render vertices of the hand after the last step, written straight into Godot's pool (Vector3 = 3 floats). */
+static int fill_vertices(Instance* self, int32_t hand, godot_pool_vector3_array* out) {
+  int32_t count = 0;
+  if (!check(self, handsim_hand_render_vertices_f32(self->world, self->hands[hand], NULL, 0, &count),
+             "hand_vertices"))
+    return 0;
+  api->godot_pool_vector3_array_resize(out, count);
+  godot_pool_vector3_array_write_access* w = api->godot_pool_vector3_array_write(out);
+  float* xyz = (float*)api->godot_pool_vector3_array_write_access_ptr(w);
+  int ok = check(self, handsim_hand_render_vertices_f32(self->world, self->hands[hand], xyz, count, &count),
+                 "hand_vertices");
+  api->godot_pool_vector3_array_write_access_destroy(w);
+  return ok;
+}
+
+static godot_variant pool3(godot_pool_vector3_array* a) {
+  godot_variant v;
+  api->godot_variant_new_pool_vector3_array(&v, a);
+  api->godot_pool_vector3_array_destroy(a);
+  return v;
+}
+
+static godot_variant m_hand_vertices(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  int32_t hand;
+  if (!args_ok(self, "hand_vertices", n, 1) || !hand_arg(self, "hand_vertices", args, &hand)) return nil();
+  godot_pool_vector3_array out;
+  api->godot_pool_vector3_array_new(&out);
+  if (!fill_vertices(self, hand, &out)) api->godot_pool_vector3_array_resize(&out, 0);
+  return pool3(&out);
+}
+
+/* Triangle indices in Godot's winding (clockwise front faces): each handsim triangle's last two corners swapped. */
+static godot_variant m_hand_indices(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  int32_t hand, count = 0;
+  if (!args_ok(self, "hand_indices", n, 1) || !hand_arg(self, "hand_indices", args, &hand)) return nil();
+  godot_pool_int_array out;
+  api->godot_pool_int_array_new(&out);
+  if (check(self, handsim_hand_triangles(self->world, self->hands[hand], NULL, 0, &count), "hand_indices")) {
+    api->godot_pool_int_array_resize(&out, count);
+    godot_pool_int_array_write_access* w = api->godot_pool_int_array_write(&out);
+    godot_int* idx = api->godot_pool_int_array_write_access_ptr(w);
+    /* godot_int is int32_t, the C ABI's index type */
+    if (check(self, handsim_hand_triangles(self->world, self->hands[hand], (int32_t*)idx, count, &count),
+              "hand_indices")) {
+      for (int32_t t = 0; t + 2 < count; t += 3) {
+        godot_int swap = idx[t + 1];
+        idx[t + 1] = idx[t + 2];
+        idx[t + 2] = swap;
+      }
+    }
+    api->godot_pool_int_array_write_access_destroy(w);
+  }
+  godot_variant v;
+  api->godot_variant_new_pool_int_array(&v, &out);
+  api->godot_pool_int_array_destroy(&out);
+  return v;
+}
+
+/* Area-weighted vertex normals of the hand's current mesh (outward). Costs a pass over all triangles, so a host
+ * asks for them when it shades the mesh, not every frame by default. */
+static godot_variant m_hand_normals(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  int32_t hand, vcount = 0, icount = 0;
+  if (!args_ok(self, "hand_normals", n, 1) || !hand_arg(self, "hand_normals", args, &hand)) return nil();
+  godot_pool_vector3_array out;
+  api->godot_pool_vector3_array_new(&out);
+  handsim_hand_id id = self->hands[hand];
+  if (!check(self, handsim_hand_render_vertices_f32(self->world, id, NULL, 0, &vcount), "hand_normals") ||
+      !check(self, handsim_hand_triangles(self->world, id, NULL, 0, &icount), "hand_normals"))
+    return pool3(&out);
+  int32_t* tri = malloc(sizeof(int32_t) * (size_t)(icount > 0 ? icount : 1));
+  if (vcount > self->vertex_capacity) {
+    free(self->vertices);
+    self->vertices = malloc(sizeof(float) * 3 * (size_t)vcount);
+    self->vertex_capacity = self->vertices ? vcount : 0;
+  }
+  if (!tri || !self->vertices) {
+    free(tri);
+    fail(self, "hand_normals: out of memory");
+    return pool3(&out);
+  }
+  const float* v = self->vertices;
+  if (check(self, handsim_hand_render_vertices_f32(self->world, id, self->vertices, vcount, &vcount),
+            "hand_normals") &&
+      check(self, handsim_hand_triangles(self->world, id, tri, icount, &icount), "hand_normals")) {
+    api->godot_pool_vector3_array_resize(&out, vcount);
+    godot_pool_vector3_array_write_access* w = api->godot_pool_vector3_array_write(&out);
+    float* nrm = (float*)api->godot_pool_vector3_array_write_access_ptr(w);
+    memset(nrm, 0, sizeof(float) * 3 * (size_t)vcount);
+    for (int32_t t = 0; t + 2 < icount; t += 3) {
+      const float *a = v + 3 * tri[t], *b = v + 3 * tri[t + 1], *c = v + 3 * tri[t + 2];
+      float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      float cr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) nrm[3 * tri[t + k] + d] += cr[d];
+    }
+    for (int32_t i = 0; i < vcount; ++i) {
+      float* p = nrm + 3 * i;
+      float len = sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+      if (len > 0.0f) p[0] /= len, p[1] /= len, p[2] /= len;
+      else p[1] = 1.0f; /* a vertex of no triangle: any unit vector keeps the shader finite */
+    }
+    api->godot_pool_vector3_array_write_access_destroy(w);
+  }
+  free(tri);
+  return pool3(&out);
+}
+
+/* ---- registration ------------------------------------------------------------------------------------------- */
+
+static void* create(godot_object* o, void* md) {
+  (void)o, (void)md;
+  Instance* self = api->godot_alloc(sizeof(Instance));
+  if (self) {
+    memset(self, 0, sizeof *self);
+    self->first_mismatch = -1;
+  }
+  return self;
+}
+
+static void destroy(godot_object* o, void* md, void* ud) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  if (!self) return;
+  close_session(self);
+  free(self->vertices);
+  api->godot_free(self);
+}
+
+void ENTRY godot_gdnative_init(godot_gdnative_init_options* options) {
+  api = options->api_struct;
+  for (unsigned i = 0; i < api->num_extensions; ++i)
+    if (api->extensions[i]->type == GDNATIVE_EXT_NATIVESCRIPT)
+      nativescript = (const godot_gdnative_ext_nativescript_api_struct*)api->extensions[i];
+}
+
+void ENTRY godot_gdnative_terminate(godot_gdnative_terminate_options* options) {
+  (void)options;
+  api = NULL;
+  nativescript = NULL;
+}
+
+void ENTRY godot_nativescript_init(void* handle) {
+  if (!nativescript) return; /* an engine without NativeScript: nothing to register */
+  if ((handsim_abi_version() >> 16) != HANDSIM_ABI_VERSION_MAJOR) {
+    api->godot_print_error("libhandsim has another ABI major version than handsim.h; HandsimWorld not registered",
+                           CLASS_NAME, __FILE__, __LINE__);
+    return;
+  }
+  godot_instance_create_func c = {create, NULL, NULL};
+  godot_instance_destroy_func d = {destroy, NULL, NULL};
+  nativescript->godot_nativescript_register_class(handle, CLASS_NAME, "Reference", c, d);
+  struct {
+    const char* name;
+    godot_variant (*fn)(godot_object*, void*, void*, int, godot_variant**);
+  } methods[] = {
+      {"open", m_open},           {"step_next", m_step_next},         {"last_error", m_last_error},
+      {"step_count", m_step_count}, {"step_index", m_step_index},     {"hand_count", m_hand_count},
+      {"first_mismatch", m_first_mismatch}, {"state_hash", m_state_hash}, {"lid_angle", m_lid_angle},
+      {"bodies", m_bodies},       {"events", m_events},               {"hand_vertices", m_hand_vertices},
+      {"hand_indices", m_hand_indices}, {"hand_normals", m_hand_normals},
+  };
+  godot_method_attributes attributes = {GODOT_METHOD_RPC_MODE_DISABLED};
+  for (size_t i = 0; i < sizeof methods / sizeof methods[0]; ++i) {
+    godot_instance_method m = {methods[i].fn, NULL, NULL};
+    nativescript->godot_nativescript_register_method(handle, CLASS_NAME, methods[i].name, attributes, m);
+  }
+}
