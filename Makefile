@@ -1,5 +1,5 @@
 # Thin wrappers over scripts/ and CMake. Each target runs the set-up first (it does nothing when done).
-.PHONY: demo test build bench experiments clean
+.PHONY: demo test build bench experiments plugin clean
 
 demo:
 	scripts/setup && scripts/build && .venv/bin/python samples/demo.py
@@ -16,5 +16,9 @@ bench:
 experiments:
 	scripts/setup && scripts/build && .venv/bin/python -m handsim.experiments
 
+# dist/handsim-plugin-<os>-<arch>/: the native plugin without Ceres, for C, C#/Unity and Godot (docs/native.md).
+plugin:
+	scripts/setup && scripts/plugin
+
 clean:
-	rm -rf build out
+	rm -rf build out dist

@@ -24,7 +24,9 @@ namespace Handsim
     public enum JointSolver { Exact = 0, Lm = 1, LmCeres = 2 }
     public enum JointModel { Hard = 0, Soft = 1 }
     public enum JointTermination { Converged = 0, MaxIterations = 1, Degenerate = 2, AtLimit = 3 }
-    public enum Handedness { Left = 0, Right = 1 }
+    // Not "Handedness": UnityEngine.XR.Hands has a Handedness enum (Invalid 0, Left 1, Right 2), and a script using both
+    // namespaces would not compile (CS0104). The values are the C ABI's HANDSIM_LEFT / HANDSIM_RIGHT.
+    public enum HandSide { Left = 0, Right = 1 }
     public enum ParticleSampling { Random = 0, Even = 1 }
     public enum ParticleContacts { ClosedForm = 0, BulletObjects = 1 }
     public enum EventType { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 }
@@ -367,7 +369,7 @@ namespace Handsim
     [StructLayout(LayoutKind.Sequential)]
     public struct HandDef
     {
-        public Handedness Handedness;
+        public HandSide Handedness;
         public int ParticleCount;
         public ParticleSampling Sampling;
         public int RenderVertices;
@@ -395,7 +397,7 @@ namespace Handsim
     [StructLayout(LayoutKind.Sequential)]
     public struct HandFrame
     {
-        public Handedness Handedness;
+        public HandSide Handedness;
         public int JointCount;
         public IntPtr Joints;
     }
@@ -414,7 +416,7 @@ namespace Handsim
     [StructLayout(LayoutKind.Sequential)]
     public struct HandInfo
     {
-        public Handedness Handedness;
+        public HandSide Handedness;
         public Bool32 Tracked;
         public int ParticleCount;
         public int VertexCount;
@@ -626,11 +628,11 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_hand_triangles(WorldHandle world, HandId hand, [Out] int[] indices, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_hand_source_vertices(WorldHandle world, HandId hand, [Out] int[] indices, int capacity, out int count);
 
-        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_make_hand_frame(Handedness handedness, ref Pose palm, ref HandPoseParams p, [Out] JointPose[] joints, int capacity);
-        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_bind_frame(Handedness handedness, double scale, [Out] JointPose[] joints, int capacity);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_make_hand_frame(HandSide handedness, ref Pose palm, ref HandPoseParams p, [Out] JointPose[] joints, int capacity);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_bind_frame(HandSide handedness, double scale, [Out] JointPose[] joints, int capacity);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_lid_pinch_shape(out HandPoseParams p);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_build_jewelry_box(WorldHandle world, ref JewelryBoxDef def, out JewelryBox box);
-        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_jewelry_box_lid_pinch_palm(WorldHandle world, ref JewelryBox box, Handedness handedness, double angle, double lift, out Pose palm);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_jewelry_box_lid_pinch_palm(WorldHandle world, ref JewelryBox box, HandSide handedness, double angle, double lift, out Pose palm);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_jewelry_box_points(WorldHandle world, ref JewelryBox box, out Vec3 lidFront, out Vec3 hingePivot, out Vec3 hingeAxis);
 
         /// <summary>Throws unless the loaded library has this file's ABI major.</summary>
@@ -658,13 +660,13 @@ namespace Handsim
     public static class Hands
     {
         /// <summary>An adult hand with its palm joint at `palm` (26 joints in OpenXR order) into `joints`.</summary>
-        public static void MakeFrame(Handedness handedness, Pose palm, HandPoseParams shape, JointPose[] joints)
+        public static void MakeFrame(HandSide handedness, Pose palm, HandPoseParams shape, JointPose[] joints)
         {
             Native.Check(Native.handsim_make_hand_frame(handedness, ref palm, ref shape, joints, joints == null ? 0 : joints.Length),
                          "handsim_make_hand_frame");
         }
 
-        public static JointPose[] MakeFrame(Handedness handedness, Pose palm, HandPoseParams shape)
+        public static JointPose[] MakeFrame(HandSide handedness, Pose palm, HandPoseParams shape)
         {
             var joints = new JointPose[Native.HandJointCount];
             MakeFrame(handedness, palm, shape, joints);
@@ -672,7 +674,7 @@ namespace Handsim
         }
 
         /// <summary>The flat hand at the identity palm pose (the procedural mesh's bind pose).</summary>
-        public static JointPose[] BindFrame(Handedness handedness, double scale = 1.0)
+        public static JointPose[] BindFrame(HandSide handedness, double scale = 1.0)
         {
             var joints = new JointPose[Native.HandJointCount];
             Native.Check(Native.handsim_bind_frame(handedness, scale, joints, joints.Length), "handsim_bind_frame");
@@ -683,9 +685,9 @@ namespace Handsim
     /// <summary>One hand's input for World.Step: its handedness and 26 joints (OpenXR order), reused every frame.</summary>
     public sealed class TrackedHand
     {
-        public Handedness Handedness;
+        public HandSide Handedness;
         public readonly JointPose[] Joints = new JointPose[Native.HandJointCount];
-        public TrackedHand(Handedness handedness) { Handedness = handedness; }
+        public TrackedHand(HandSide handedness) { Handedness = handedness; }
     }
 
     /// <summary>A handsim world. Not thread-safe: use one world from one thread at a time.</summary>
@@ -694,6 +696,7 @@ namespace Handsim
         readonly WorldHandle handle;
         HandFrame[] frames = new HandFrame[0];
         GCHandle[] pins = new GCHandle[0];
+        readonly TrackedHand[] one = new TrackedHand[1], two = new TrackedHand[2];  // Step's allocation-free overloads
 
         public World() : this(WorldSettings.Default) { }
 
@@ -719,10 +722,30 @@ namespace Handsim
         /// <summary>One frame with no tracked hands.</summary>
         public void Step(double dt) { Native.Check(Native.handsim_step(handle, dt, null, 0), "handsim_step"); }
 
-        /// <summary>One frame: hands[i] drives the i-th hand of Hands() (fewer: the rest are untracked).</summary>
+        /// <summary>One frame driving the first hand (the others untracked). Unlike Step(dt, params ...) with one
+        /// argument, it allocates nothing: a frame loop calls this, or passes an array it keeps.</summary>
+        public void Step(double dt, TrackedHand hand)
+        {
+            one[0] = hand;
+            try { Step(dt, one); }
+            finally { one[0] = null; }
+        }
+
+        /// <summary>One frame driving the first two hands; allocates nothing (see Step(dt, hand)).</summary>
+        public void Step(double dt, TrackedHand first, TrackedHand second)
+        {
+            two[0] = first; two[1] = second;
+            try { Step(dt, two); }
+            finally { two[0] = two[1] = null; }
+        }
+
+        /// <summary>One frame: hands[i] drives the i-th hand of Hands() (fewer: the rest are untracked). Pins each
+        /// hand's joints for the call; allocates nothing once the world has seen this many hands.</summary>
         public void Step(double dt, params TrackedHand[] hands)
         {
             int n = hands == null ? 0 : hands.Length;
+            for (int i = 0; i < n; ++i)
+                if (hands[i] == null) throw new ArgumentNullException("hands", "hands[" + i + "] is null");
             if (frames.Length < n) { frames = new HandFrame[n]; pins = new GCHandle[n]; }
             try
             {
@@ -757,10 +780,16 @@ namespace Handsim
             return System.Text.Encoding.UTF8.GetString(text, 0, Math.Max(0, text.Length - 1));
         }
 
+        // The frame-loop readers (Events, HandParticles, HandRenderVertices[F32]) call the library directly instead of
+        // through Native.Fill: a lambda capturing the handle would allocate a closure and a delegate on every call.
         /// <summary>Events of the last step into `buffer` (grown when needed); returns their number.</summary>
         public int Events(ref Event[] buffer)
         {
-            return Native.Fill(ref buffer, (Event[] b, int c, out int n) => Native.handsim_events(handle, b, c, out n), "handsim_events");
+            int count;
+            Native.Check(Native.handsim_events(handle, null, 0, out count), "handsim_events");
+            if (buffer == null || buffer.Length < count) buffer = new Event[count];
+            Native.Check(Native.handsim_events(handle, buffer, buffer.Length, out count), "handsim_events");
+            return count;
         }
 
         public Event[] Events()
@@ -865,15 +894,21 @@ namespace Handsim
         /// <summary>Particle centres (tracked, or deformed as drawn) into `buffer` (grown when needed); returns the count.</summary>
         public int HandParticles(HandId hand, bool deformed, ref Vec3[] buffer)
         {
-            return Native.Fill(ref buffer, (Vec3[] b, int c, out int n) => Native.handsim_hand_particles(handle, hand, deformed ? 1 : 0, b, c, out n),
-                               "handsim_hand_particles");
+            int count, flag = deformed ? 1 : 0;
+            Native.Check(Native.handsim_hand_particles(handle, hand, flag, null, 0, out count), "handsim_hand_particles");
+            if (buffer == null || buffer.Length < count) buffer = new Vec3[count];
+            Native.Check(Native.handsim_hand_particles(handle, hand, flag, buffer, buffer.Length, out count), "handsim_hand_particles");
+            return count;
         }
 
         /// <summary>Skinned, deformed render vertices in double precision; returns the count.</summary>
         public int HandRenderVertices(HandId hand, ref Vec3[] buffer)
         {
-            return Native.Fill(ref buffer, (Vec3[] b, int c, out int n) => Native.handsim_hand_render_vertices(handle, hand, b, c, out n),
-                               "handsim_hand_render_vertices");
+            int count;
+            Native.Check(Native.handsim_hand_render_vertices(handle, hand, null, 0, out count), "handsim_hand_render_vertices");
+            if (buffer == null || buffer.Length < count) buffer = new Vec3[count];
+            Native.Check(Native.handsim_hand_render_vertices(handle, hand, buffer, buffer.Length, out count), "handsim_hand_render_vertices");
+            return count;
         }
 
         /// <summary>Render vertices as float x, y, z triples (for a GPU mesh); returns the vertex count.</summary>
@@ -910,7 +945,7 @@ namespace Handsim
         }
 
         /// <summary>The palm pose of a hand pinching the lid's lip, swung about the hinge by `angle` (rad).</summary>
-        public Pose LidPinchPalm(JewelryBox box, Handedness handedness, double angle, double lift = 0)
+        public Pose LidPinchPalm(JewelryBox box, HandSide handedness, double angle, double lift = 0)
         {
             Pose palm;
             Native.Check(Native.handsim_jewelry_box_lid_pinch_palm(handle, ref box, handedness, angle, lift, out palm),

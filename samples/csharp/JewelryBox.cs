@@ -14,7 +14,7 @@ static class JewelryBoxSample
         {
             JewelryBox box = world.BuildJewelryBox();
             world.AddHand(HandDef.Default);
-            var hand = new TrackedHand(Handedness.Right);
+            var hand = new TrackedHand(HandSide.Right);
             HandPoseParams pinch = HandPoseParams.LidPinch;
             Console.WriteLine("frame  time_s  hand_deg  lid_deg  grasped");
             for (int i = 0; i <= 130; ++i)
@@ -22,7 +22,7 @@ static class JewelryBoxSample
                 // 10 frames to close the pinch, then the hand swings to 80 degrees over 2 s.
                 double t = i < 10 ? 0.0 : Math.Min((i - 10) / 120.0, 1.0);
                 double handAngle = t * 80.0 * Math.PI / 180.0;
-                Hands.MakeFrame(Handedness.Right, world.LidPinchPalm(box, Handedness.Right, handAngle), pinch, hand.Joints);
+                Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, handAngle), pinch, hand.Joints);
                 world.Step(dt, hand);
                 if (i % 10 == 0)
                     Console.WriteLine(string.Format("{0,5}  {1,6:F3}  {2,8:F2}  {3,7:F2}  {4}", i, (i + 1) * dt, handAngle * 180.0 / Math.PI,

@@ -1,22 +1,27 @@
-// Unity sample (not compiled in this repository: it needs UnityEngine). Drop it into a Unity project together with
-// bindings/csharp/Handsim.cs and the native plugin (Assets/Plugins/<platform>/libhandsim.so | handsim.dll |
-// libhandsim.dylib, plus its Bullet/Ceres dependencies on Linux), then add it to a GameObject.
+// Unity sample. The plugin bundle (make plugin) ships it in its Unity package (Samples~/Hands, with Handsim.cs and
+// the native plugin under Runtime/); docs/native.md has the steps. It has not been run in Unity: ctest
+// unity_sample_compiles compiles it with mcs against stand-ins of the UnityEngine and XR Hands names it uses
+// (tests/unity/), which catches clashes such as XR Hands' Handedness against ours (hence HandSide).
 //
-// What it does each frame: reads 26 joint Transforms per tracked hand (OpenXR order; e.g. driven by XR Hands'
-// XRHandSkeletonDriver, or any rig), converts them from Unity space to handsim space, steps the world, and writes
+// What it does each frame: reads each hand's 26 joints, either from XR Hands (XRHandSubsystem) or from 26 joint
+// Transforms (OpenXR order; any rig), converts them from Unity space to handsim space, steps the world, and writes
 // the simulated poses back onto the bound Transforms and the skinned hand meshes. Every conversion and all the
-// handsim logic live in Handsim.cs (compiled and tested under Mono by ctest csharp_abi); this file only moves data
-// between Unity objects and those calls.
+// handsim logic live in Handsim.cs (compiled and tested under Mono by ctest csharp_abi, which also checks that
+// such a frame loop allocates nothing); this file only moves data between Unity objects and those calls, into
+// arrays allocated once.
 using System.Collections.Generic;
 using Handsim;
 using UnityEngine;
+using UnityEngine.XR.Hands;
 
 public class HandsimHands : MonoBehaviour
 {
     [System.Serializable]
     public class TrackedJoints
     {
-        public Handedness handedness = Handedness.Right;
+        public HandSide handedness = HandSide.Right;
+        [Tooltip("Read this hand from XR Hands' running XRHandSubsystem (its leftHand / rightHand) instead of joints.")]
+        public bool fromXRHands = true;
         [Tooltip("26 joints in OpenXR order (palm, wrist, thumb metacarpal ... little tip). With XR Hands, joint i is " +
                  "XRHandJointID value UnityConvert.XRHandJointID(i).")]
         public Transform[] joints = new Transform[Native.HandJointCount];
@@ -33,6 +38,9 @@ public class HandsimHands : MonoBehaviour
 
     public TrackedJoints[] hands = { new TrackedJoints() };
     public BoxBody[] boxes = new BoxBody[0];
+    [Tooltip("Recompute the hand meshes' normals every frame (a pass over all 39k vertices; off: the normals of the " +
+             "first frame stay, which is enough for a flat or unlit material).")]
+    public bool recalculateNormals = false;
     [Tooltip("Add the paper's jewelry box and drive these Transforms with its base and lid.")]
     public bool jewelryBox = true;
     public Transform jewelryBase, jewelryLid;
@@ -46,15 +54,21 @@ public class HandsimHands : MonoBehaviour
     readonly float[] positions = new float[3 * Native.HandJointCount];
     readonly float[] rotations = new float[4 * Native.HandJointCount];
     readonly bool[] valid = new bool[Native.HandJointCount];
+    readonly float[] radii = new float[Native.HandJointCount];
     float[] vertices;
-    Vector3[] unityVertices;
+    Vector3[][] unityVertices;  // per hand, allocated once
     Handsim.Event[] events;  // UnityEngine has its own Event, Pose and EventType: qualify
+    bool[] normalsDone = new bool[0];
+    XRHandSubsystem xrHands;
+    readonly List<XRHandSubsystem> subsystems = new List<XRHandSubsystem>();
 
     void Start()
     {
         world = new World();  // checks the plugin's ABI version, throws HandsimException on a mismatch
         input = new TrackedHand[hands.Length];
         handIds = new HandId[hands.Length];
+        unityVertices = new Vector3[hands.Length][];
+        normalsDone = new bool[hands.Length];
         for (int h = 0; h < hands.Length; ++h)
         {
             HandDef def = HandDef.Default;
@@ -64,9 +78,8 @@ public class HandsimHands : MonoBehaviour
             if (hands[h].renderMesh != null)
             {
                 var mesh = new Mesh { indexFormat = UnityEngine.Rendering.IndexFormat.UInt32 };
-                world.HandRenderVerticesF32(handIds[h], ref vertices);
-                unityVertices = new Vector3[world.HandInfo(handIds[h]).VertexCount];
-                mesh.vertices = unityVertices;
+                unityVertices[h] = new Vector3[world.HandInfo(handIds[h]).VertexCount];
+                mesh.vertices = unityVertices[h];
                 mesh.triangles = UnityConvert.TrianglesToUnity(world.HandTriangles(handIds[h]));
                 hands[h].renderMesh.mesh = mesh;
             }
@@ -106,21 +119,14 @@ public class HandsimHands : MonoBehaviour
 
     void Update()
     {
-        // Hand input: Unity space -> handsim space. A missing or inactive joint Transform is an invalid joint; a hand
-        // whose palm or wrist is invalid is untracked this frame (the world releases it after its grace time).
+        // Hand input: Unity space -> handsim space. An untracked joint (XR Hands) or a missing or inactive joint
+        // Transform is an invalid joint; a hand whose palm or wrist is invalid is untracked this frame (the world
+        // releases what it held after its grace time).
         for (int h = 0; h < hands.Length; ++h)
         {
-            Transform[] joints = hands[h].joints;
-            for (int j = 0; j < Native.HandJointCount; ++j)
-            {
-                Transform t = j < joints.Length ? joints[j] : null;
-                valid[j] = t != null && t.gameObject.activeInHierarchy;
-                Vector3 p = valid[j] ? t.position : Vector3.zero;
-                Quaternion q = valid[j] ? t.rotation : Quaternion.identity;
-                positions[3 * j] = p.x; positions[3 * j + 1] = p.y; positions[3 * j + 2] = p.z;
-                rotations[4 * j] = q.x; rotations[4 * j + 1] = q.y; rotations[4 * j + 2] = q.z; rotations[4 * j + 3] = q.w;
-            }
-            UnityConvert.JointsFromUnity(positions, rotations, null, valid, input[h].Joints);
+            if (hands[h].fromXRHands) ReadXRHand(hands[h].handedness);
+            else ReadTransforms(hands[h].joints);
+            UnityConvert.JointsFromUnity(positions, rotations, hands[h].fromXRHands ? radii : null, valid, input[h].Joints);
         }
 
         world.Step(Time.deltaTime, input);  // fixed substeps inside: frame-rate independent
@@ -144,11 +150,11 @@ public class HandsimHands : MonoBehaviour
             if (hands[h].renderMesh == null) continue;
             int n = world.HandRenderVerticesF32(handIds[h], ref vertices);
             UnityConvert.VerticesToUnity(vertices, n);
-            if (unityVertices == null || unityVertices.Length != n) unityVertices = new Vector3[n];
-            for (int i = 0; i < n; ++i) unityVertices[i] = new Vector3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
+            Vector3[] v = unityVertices[h];
+            for (int i = 0; i < n; ++i) v[i] = new Vector3(vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]);
             Mesh mesh = hands[h].renderMesh.mesh;
-            mesh.vertices = unityVertices;
-            mesh.RecalculateNormals();
+            mesh.vertices = v;
+            if (recalculateNormals || !normalsDone[h]) { mesh.RecalculateNormals(); normalsDone[h] = true; }
             mesh.RecalculateBounds();
         }
 
@@ -157,6 +163,51 @@ public class HandsimHands : MonoBehaviour
         for (int i = 0; i < count; ++i)
             if (events[i].Type == Handsim.EventType.GraspBegin || events[i].Type == Handsim.EventType.GraspEnd)
                 Debug.Log("handsim: " + events[i]);
+    }
+
+    // One XR Hands hand into positions/rotations/radii/valid (session space, which is the XR Origin's: put this
+    // component's world at the origin, or convert the poses with the XR Origin's transform first).
+    void ReadXRHand(HandSide side)
+    {
+        if (xrHands == null || !xrHands.running)
+        {
+            SubsystemManager.GetSubsystems(subsystems);
+            xrHands = null;
+            foreach (XRHandSubsystem s in subsystems) if (s.running) { xrHands = s; break; }
+        }
+        bool tracked = false;
+        XRHand hand = default(XRHand);
+        if (xrHands != null)
+        {
+            hand = side == HandSide.Left ? xrHands.leftHand : xrHands.rightHand;
+            tracked = hand.isTracked && hand.handedness == (side == HandSide.Left ? Handedness.Left : Handedness.Right);
+        }
+        for (int j = 0; j < Native.HandJointCount; ++j)
+        {
+            UnityEngine.Pose pose = UnityEngine.Pose.identity;
+            float radius = 0.01f;
+            valid[j] = tracked && hand.GetJoint((XRHandJointID)UnityConvert.XRHandJointID(j)).TryGetPose(out pose);
+            if (valid[j] && !hand.GetJoint((XRHandJointID)UnityConvert.XRHandJointID(j)).TryGetRadius(out radius))
+                radius = 0.01f;  // the provider gives no radius: 1 cm, a finger joint's order of size
+            Store(j, pose.position, pose.rotation);
+            radii[j] = radius;
+        }
+    }
+
+    void ReadTransforms(Transform[] joints)
+    {
+        for (int j = 0; j < Native.HandJointCount; ++j)
+        {
+            Transform t = j < joints.Length ? joints[j] : null;
+            valid[j] = t != null && t.gameObject.activeInHierarchy;
+            Store(j, valid[j] ? t.position : Vector3.zero, valid[j] ? t.rotation : Quaternion.identity);
+        }
+    }
+
+    void Store(int j, Vector3 p, Quaternion q)
+    {
+        positions[3 * j] = p.x; positions[3 * j + 1] = p.y; positions[3 * j + 2] = p.z;
+        rotations[4 * j] = q.x; rotations[4 * j + 1] = q.y; rotations[4 * j + 2] = q.z; rotations[4 * j + 3] = q.w;
     }
 
     void OnDestroy()

@@ -141,7 +141,7 @@ static class CSharpTest
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
             HandPoseParams shape = HandPoseParams.LidPinch;
-            var input = new TrackedHand(Handedness.Right);
+            var input = new TrackedHand(HandSide.Right);
             Event[] events = null;
             double maxAngle = double.MinValue, minAngle = double.MaxValue, maxViolation = 0;
             int grasped = 0, graspBegins = 0;
@@ -150,7 +150,7 @@ static class CSharpTest
             var outsideSeconds = new List<double>();  // World.Step's wall time minus the time the core's stages report
             for (int i = 0; i < Frames; ++i)
             {
-                Hands.MakeFrame(Handedness.Right, world.LidPinchPalm(box, Handedness.Right, ScenarioAngle(i)), shape, input.Joints);
+                Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), shape, input.Joints);
                 watch.Restart();
                 world.Step(Dt, input);
                 watch.Stop();
@@ -221,10 +221,10 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            var input = new TrackedHand(Handedness.Right);
+            var input = new TrackedHand(HandSide.Right);
             for (int i = 0; i < 20; ++i)
             {
-                Hands.MakeFrame(Handedness.Right, world.LidPinchPalm(box, Handedness.Right, ScenarioAngle(i)), HandPoseParams.LidPinch, input.Joints);
+                Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), HandPoseParams.LidPinch, input.Joints);
                 world.Step(Dt, input);
             }
             BodyDef def = BodyDef.Default;
@@ -238,10 +238,10 @@ static class CSharpTest
             Rejects(world, () => world.BodyPose(BodyId.Null), Status.StaleId, "body: is the null id");
             Rejects(world, () => world.RemoveHand(new HandId { Value = box.Lid.Value }), Status.StaleId, "hand:");
             Rejects(world, () => world.Step(Dt, input, input), Status.InvalidArgument, "hands: got 2 frames but the world has 1 hands");
-            var left = new TrackedHand(Handedness.Left);
+            var left = new TrackedHand(HandSide.Left);
             Array.Copy(input.Joints, left.Joints, input.Joints.Length);
             Rejects(world, () => world.Step(Dt, left), Status.InvalidArgument, "hands[0].handedness: does not match");
-            var bent = new TrackedHand(Handedness.Right);
+            var bent = new TrackedHand(HandSide.Right);
             Array.Copy(input.Joints, bent.Joints, input.Joints.Length);
             bent.Joints[3].Orientation.W = 3;
             Rejects(world, () => world.Step(Dt, bent), Status.InvalidArgument, "hands[0].joints[3].orientation: quaternion");
@@ -254,7 +254,7 @@ static class CSharpTest
             GCHandle pin = GCHandle.Alloc(joints25, GCHandleType.Pinned);
             try
             {
-                var frames = new[] { new HandFrame { Handedness = Handedness.Right, JointCount = 25, Joints = pin.AddrOfPinnedObject() } };
+                var frames = new[] { new HandFrame { Handedness = HandSide.Right, JointCount = 25, Joints = pin.AddrOfPinnedObject() } };
                 Rejects(world, () => Native.Check(Native.handsim_step(world.Handle, Dt, frames, 1), "handsim_step"),
                         Status.InvalidArgument, "hands[0].joint_count: must be 26");
             }
@@ -267,7 +267,7 @@ static class CSharpTest
             Check(count == 1182 && small[0].X == 42, "a too-small buffer: count " + count + ", the buffer untouched");
             Rejects(world, () => Native.Check(Native.handsim_hand_particles(world.Handle, hand, 0, null, 5, out count), "handsim_hand_particles"),
                     Status.InvalidArgument, "out_positions: must not be null when capacity is 5");
-            Rejects(world, () => Hands.MakeFrame(Handedness.Right, Pose.Identity, HandPoseParams.LidPinch, new JointPose[20]),
+            Rejects(world, () => Hands.MakeFrame(HandSide.Right, Pose.Identity, HandPoseParams.LidPinch, new JointPose[20]),
                     Status.InvalidArgument, "out_joints: capacity 20 is too small, needs 26");
 
             def.Mass = -1;
@@ -359,21 +359,21 @@ static class CSharpTest
             var tris = new[] { 0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5 };
             HandDef hd = HandDef.Default;
             hd.ParticleCount = 6;
-            HandId custom = world.AddHand(hd, octa, bones, weights, tris, Hands.BindFrame(Handedness.Right));
+            HandId custom = world.AddHand(hd, octa, bones, weights, tris, Hands.BindFrame(HandSide.Right));
             HandInfo info = world.HandInfo(custom);
             Check(info.VertexCount == 6 && info.TriangleIndexCount == 24 && info.ParticleCount >= 1, "custom mesh hand: " + info.VertexCount +
                   " vertices, " + info.ParticleCount + " particles");
             Check(world.HandSourceVertices(custom).Length == 6, "source vertices");
             var palm = new Pose(new Vec3(0, 1, 0), Quat.Identity);
-            var tracked = new TrackedHand(Handedness.Right);
-            Hands.MakeFrame(Handedness.Right, palm, HandPoseParams.Default, tracked.Joints);
+            var tracked = new TrackedHand(HandSide.Right);
+            Hands.MakeFrame(HandSide.Right, palm, HandPoseParams.Default, tracked.Joints);
             world.Step(Dt, tracked);
             Vec3[] verts = null;
             world.HandRenderVertices(custom, ref verts);
             double minY = double.MaxValue;
             foreach (Vec3 v in verts) minY = Math.Min(minY, v.Y);
             Check(world.HandInfo(custom).Tracked && Math.Abs(minY - 0.98) < 1e-9, "the custom mesh follows the palm: min y " + minY);
-            Rejects(world, () => world.AddHand(hd, octa, bones, new double[4 * octa.Length], tris, Hands.BindFrame(Handedness.Right)),
+            Rejects(world, () => world.AddHand(hd, octa, bones, new double[4 * octa.Length], tris, Hands.BindFrame(HandSide.Right)),
                     Status.InvalidArgument, "mesh.weights: must sum to 1");
         }
     }
@@ -427,7 +427,7 @@ static class CSharpTest
         Check(UnityConvert.XRHandJointID(0) == 2 && UnityConvert.XRHandJointID(1) == 1 && UnityConvert.XRHandJointID(2) == 3 &&
               UnityConvert.XRHandJointID(25) == 26, "XRHandJointID mapping");
         // a hand through Unity space and back drives the same hand
-        JointPose[] frame = Hands.MakeFrame(Handedness.Right, new Pose(new Vec3(0.1, 1.0, -0.3), Quat.AxisAngle(new Vec3(1, 1, 0), 0.4)),
+        JointPose[] frame = Hands.MakeFrame(HandSide.Right, new Pose(new Vec3(0.1, 1.0, -0.3), Quat.AxisAngle(new Vec3(1, 1, 0), 0.4)),
                                             HandPoseParams.LidPinch);
         var pos = new float[3 * 26];
         var rot = new float[4 * 26];
@@ -487,6 +487,55 @@ static class CSharpTest
         }
     }
 
+    // --- no allocations in a frame loop --------------------------------------------------------------------------
+
+    // What a host calls every frame: fill the joints, step, read events, body poses, the joint, the grasp, the hand's
+    // render vertices and particles, the hash. After a warm-up (the first frames grow the caller's buffers) it must
+    // allocate nothing on the managed heap: a game's frame loop must not feed the GC. Measured under Mono with
+    // GC.GetAllocatedBytesForCurrentThread over 1,000 frames of the scenario's swing and hold.
+    static void TestFrameLoopAllocations()
+    {
+        using (var world = new World())
+        {
+            JewelryBox box = world.BuildJewelryBox();
+            HandId hand = world.AddHand(HandDef.Default);
+            HandPoseParams shape = HandPoseParams.LidPinch;
+            var input = new TrackedHand(HandSide.Right);
+            var two = new TrackedHand[] { input };
+            BodyId[] bodies = { box.Base, box.Lid };
+            var poses = new Pose[2];
+            Event[] events = null;
+            float[] vertices = null;
+            Vec3[] particles = null;
+            ulong sink = 0;
+            int frame = 0;
+            Action<int> frames = count =>
+            {
+                for (int k = 0; k < count; ++k, ++frame)
+                {
+                    Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(frame % Frames)),
+                                    shape, input.Joints);
+                    if (frame % 2 == 0) world.Step(Dt, input); else world.Step(Dt, two);
+                    int n = world.Events(ref events);
+                    for (int e = 0; e < n; ++e) sink += (ulong)events[e].Type;
+                    world.BodyPoses(bodies, poses);
+                    sink += (ulong)world.JointState(box.Hinge).Iterations;
+                    if (world.BodyGrasp(box.Lid).Grasped) ++sink;
+                    sink += (ulong)world.HandRenderVerticesF32(hand, ref vertices);
+                    sink += (ulong)world.HandParticles(hand, true, ref particles);
+                    sink ^= world.StateHash;
+                }
+            };
+            frames(20);  // warm-up: buffers grow, the JIT compiles
+            long before = GC.GetAllocatedBytesForCurrentThread();
+            frames(1000);
+            long allocated = GC.GetAllocatedBytesForCurrentThread() - before;
+            Console.WriteLine("frame loop: " + allocated + " bytes allocated over 1000 frames (Step, Events, BodyPoses, " +
+                              "JointState, BodyGrasp, HandRenderVerticesF32, HandParticles, StateHash; checksum " + (sink & 1) + ")");
+            Check(allocated == 0, "the frame loop allocated " + allocated + " bytes over 1000 frames");
+        }
+    }
+
     static int Main(string[] args)
     {
         if (args.Length != 1) { Console.Error.WriteLine("usage: CSharpTest.exe <c_host_hash_file>"); return 2; }
@@ -498,6 +547,7 @@ static class CSharpTest
         TestBadInputs();
         TestShapesJointsAndMesh();
         TestUnityConversions();
+        TestFrameLoopAllocations();
         MeasureCallCost();
         Console.WriteLine(checks + " checks, " + failures + " failures");
         return failures == 0 ? 0 : 1;
