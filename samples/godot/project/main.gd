@@ -6,7 +6,8 @@ extends Spatial
 # inputs. A live tracker would pass delta instead.
 #
 # Command-line options (after `--`): --session=PATH (default res://session.hsframes), --no-normals (skip the
-# per-frame normals), --quit-at-end (always on under the headless server). On quitting it prints one line,
+# per-frame normals), --quit-at-end (always on under the headless server), --screenshot=PATH (with a renderer:
+# saves the last frame as a PNG, then quits). On quitting it prints one line,
 #   handsim_godot steps N state_hash 0x... first_mismatch M grasp_begin G lid_max_deg A hand_vertices V surfaces S
 # and exits 1 when the session could not be opened or a step's hash differs from the recorded one.
 
@@ -21,6 +22,7 @@ var quit_at_end = false
 var grasp_begins = 0
 var lid_max = 0.0
 var vertex_count = 0
+var screenshot = ""
 
 
 func _ready():
@@ -33,6 +35,8 @@ func _ready():
 			with_normals = false
 		elif arg == "--quit-at-end":
 			quit_at_end = true
+		elif arg.begins_with("--screenshot="):
+			screenshot = arg.substr(len("--screenshot="), len(arg))
 	sim = HandsimWorld.new()
 	if sim == null:
 		printerr("handsim_godot: the HandsimWorld class did not load (see the GDNative errors above)")
@@ -58,7 +62,8 @@ func _ready():
 		bodies[name] = mesh_instance
 	_place_bodies(state)
 	var camera = Camera.new()
-	camera.look_at_from_position(Vector3(0.35, 0.45, 0.55), Vector3(0.0, 0.08, 0.0), Vector3.UP)
+	var target = state["base"]["transform"].origin  # the box stands on a table: look at it from the front right
+	camera.look_at_from_position(target + Vector3(0.25, 0.22, 0.38), target + Vector3(0.0, 0.05, 0.0), Vector3.UP)
 	add_child(camera)
 	var light = DirectionalLight.new()
 	light.rotation_degrees = Vector3(-50.0, 30.0, 0.0)
@@ -109,6 +114,12 @@ func _finish():
 	print("handsim_godot steps %d state_hash %s first_mismatch %d grasp_begin %d lid_max_deg %.3f hand_vertices %d surfaces %d"
 		% [sim.step_index(), sim.state_hash(), sim.first_mismatch(), grasp_begins, rad2deg(lid_max), vertex_count,
 		   surfaces])
+	if screenshot != "":
+		yield(VisualServer, "frame_post_draw")  # the last step drawn
+		var image = get_viewport().get_texture().get_data()
+		image.flip_y()  # the viewport texture is stored bottom-up
+		image.save_png(screenshot)
+		quit_at_end = true
 	if quit_at_end:
 		_quit(0 if sim.first_mismatch() < 0 else 1)
 
