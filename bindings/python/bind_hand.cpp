@@ -73,7 +73,7 @@ py::array_t<double> joint_positions(const HandFrame& f) {
   auto r = a.mutable_unchecked<2>();
   for (int j = 0; j < kHandJointCount; ++j)
     for (int k = 0; k < 3; ++k) r(j, k) = f.joints[j].position[k];
-  return a;
+  return read_only(a);
 }
 
 py::array_t<double> joint_orientations(const HandFrame& f) {
@@ -81,14 +81,14 @@ py::array_t<double> joint_orientations(const HandFrame& f) {
   auto r = a.mutable_unchecked<2>();
   for (int j = 0; j < kHandJointCount; ++j)
     for (int k = 0; k < 4; ++k) r(j, k) = f.joints[j].orientation.coeffs()[k];  // x, y, z, w
-  return a;
+  return read_only(a);
 }
 
 template <class T, class Field>
 py::array_t<T> joint_scalars(const HandFrame& f, Field field) {
   py::array_t<T> a(kHandJointCount);
   for (int j = 0; j < kHandJointCount; ++j) a.mutable_at(j) = T(f.joints[j].*field);
-  return a;
+  return read_only(a);
 }
 
 double scalar_arg(py::handle obj, const char* argument) {
@@ -150,7 +150,7 @@ quaternion (within 1e-3) and a radius >= 0. The hand is tracked when its palm an
       .def_property_readonly("radii", [](const HandFrame& f) { return joint_scalars<double>(f, &JointPose::radius); })
       .def_property_readonly("valid", [](const HandFrame& f) { return joint_scalars<bool>(f, &JointPose::valid); })
       .def_property_readonly("tracked", &HandFrame::tracked, "palm and wrist valid")
-      .def_property_readonly("palm_pose", [](const HandFrame& f) { return from_pose(f.palm_pose()); },
+      .def_property_readonly("palm_pose", [](const HandFrame& f) { return read_only(from_pose(f.palm_pose())); },
                              "(7,) x, y, z, qx, qy, qz, qw")
       .def("joint_pose",
            [](const HandFrame& f, int joint) {
@@ -189,7 +189,7 @@ quaternion (within 1e-3) and a radius >= 0. The hand is tracked when its palm an
   py::class_<HandPoseParams> params(m, "HandPoseParams", "Pose of a synthetic hand: curl, opposition, spread, size.");
   params.def(py::init([](py::kwargs kw) { return from_kwargs<HandPoseParams>(kw, "HandPoseParams"); }))
       .def_property(
-          "curl", [](const HandPoseParams& p) { return py::array_t<double>(5, p.curl.data()); },
+          "curl", [](const HandPoseParams& p) { return read_only(py::array_t<double>(5, p.curl.data())); },
           [](HandPoseParams& p, py::handle v) {
             Array a = as_array(v, "curl");
             require_shape(a, {5}, "curl");
@@ -244,7 +244,7 @@ IntArray index_array(py::handle obj, py::ssize_t cols, const char* argument) {
 py::array_t<int> triangle_array(const std::vector<int>& triangles) {
   py::array_t<int> a({py::ssize_t(triangles.size() / 3), py::ssize_t(3)});
   std::copy(triangles.begin(), triangles.end(), a.mutable_data());
-  return a;
+  return read_only(a);
 }
 
 void bind_mesh(py::module_& m) {
@@ -270,9 +270,9 @@ triangles (M, 3) vertex indices, counter-clockwise seen from outside). Unused in
              return mesh;
            }),
            py::arg("positions"), py::arg("bones"), py::arg("weights"), py::arg("triangles"))
-      .def_property_readonly("positions", [](const SkinnedMesh& s) { return from_columns(s.positions); })
-      .def_property_readonly("bones", [](const SkinnedMesh& s) { return from_columns(s.bones); })
-      .def_property_readonly("weights", [](const SkinnedMesh& s) { return from_columns(s.weights); })
+      .def_property_readonly("positions", [](const SkinnedMesh& s) { return read_only(from_columns(s.positions)); })
+      .def_property_readonly("bones", [](const SkinnedMesh& s) { return read_only(from_columns(s.bones)); })
+      .def_property_readonly("weights", [](const SkinnedMesh& s) { return read_only(from_columns(s.weights)); })
       .def_property_readonly("triangles", [](const SkinnedMesh& s) { return triangle_array(s.triangles); })
       .def_property_readonly("vertex_count", [](const SkinnedMesh& s) { return s.positions.cols(); })
       .def_property_readonly("triangle_count", [](const SkinnedMesh& s) { return s.triangles.size() / 3; })
@@ -329,20 +329,20 @@ model's order; source_vertex maps them back to the mesh that was given or genera
       .def_property_readonly("bind", [](const HandModelRef& r) { return r.get().bind; }, "bind HandFrame")
       .def_property_readonly("mesh", [](const HandModelRef& r) { return r.get().mesh; },
                              "the render SkinnedMesh in model order (a copy)")
-      .def_property_readonly("bind_vertices", [](const HandModelRef& r) { return from_columns(r.get().mesh.positions); },
+      .def_property_readonly("bind_vertices", [](const HandModelRef& r) { return read_only(from_columns(r.get().mesh.positions)); },
                              "(V, 3) bind-pose render vertices")
       .def_property_readonly("triangles", [](const HandModelRef& r) { return triangle_array(r.get().mesh.triangles); },
                              "(M, 3) render triangles (model vertex indices)")
       .def_property_readonly("particle_vertex",
                              [](const HandModelRef& r) {
                                const auto& v = r.get().particle_vertex;
-                               return py::array_t<int>(py::ssize_t(v.size()), v.data());
+                               return read_only(py::array_t<int>(py::ssize_t(v.size()), v.data()));
                              },
                              "(N,) model vertex of each particle")
       .def_property_readonly("source_vertex",
                              [](const HandModelRef& r) {
                                const auto& v = r.get().source_vertex;
-                               return py::array_t<int>(py::ssize_t(v.size()), v.data());
+                               return read_only(py::array_t<int>(py::ssize_t(v.size()), v.data()));
                              },
                              "(V,) index in the given/generated mesh of each model vertex")
       .def_property_readonly("exposed",
@@ -350,7 +350,7 @@ model's order; source_vertex maps them back to the mesh that was given or genera
                                const auto& v = r.get().exposed;
                                py::array_t<bool> a(py::ssize_t(v.size()));
                                std::copy(v.begin(), v.end(), a.mutable_data());
-                               return a;
+                               return read_only(a);
                              },
                              "(V,) True where the vertex is on the skin (particles are chosen among these)")
       .def("__repr__", [](const HandModelRef& r) {
@@ -420,7 +420,7 @@ as collide_particles. For benchmarks and agreement checks.)doc")
            py::arg("shape"), py::arg("pose"), "Returns the body's index (0, 1, ...).")
       .def("set_body_pose",
            [](BulletParticleCollider& c, int body, py::handle pose) { c.set_body_pose(body, to_pose(pose, "pose")); },
-           py::arg("body"), py::arg("pose"))
+           py::arg("body"), py::arg("pose"), "Move body (an index from add_body) to pose (7,).")
       .def("collide",
            [](BulletParticleCollider& c, py::handle centres) {
              const Eigen::Matrix3Xd cs = centres_arg(centres);

@@ -47,13 +47,13 @@ void converted_property(py::class_<T>& cls, const char* name, F T::*field, Out o
 template <class T>
 void vec3_property(py::class_<T>& cls, const char* name, Vec3 T::*field, const std::string& argument,
                    const char* doc) {
-  converted_property(cls, name, field, &from_vec3, &to_vec3, argument, doc);
+  converted_property(cls, name, field, [](const Vec3& v) { return read_only(from_vec3(v)); }, &to_vec3, argument, doc);
 }
 
 template <class T>
 void quat_property(py::class_<T>& cls, const char* name, Quat T::*field, const std::string& argument,
                    const char* doc) {
-  converted_property(cls, name, field, &from_quat, &to_quat, argument, doc);
+  converted_property(cls, name, field, [](const Quat& q) { return read_only(from_quat(q)); }, &to_quat, argument, doc);
 }
 
 template <class T>
@@ -136,7 +136,7 @@ body's own frame. Limits in radians (-inf/inf: none), upper - lower <= 2 pi.)doc
       .def_readwrite("upper", &HingeDef::upper, "radians, inf for none")
       .def_property(
           "rest_orientation",
-          [](const HingeDef& d) { return d.rest_orientation ? py::object(from_quat(*d.rest_orientation)) : py::none(); },
+          [](const HingeDef& d) { return d.rest_orientation ? py::object(read_only(from_quat(*d.rest_orientation))) : py::none(); },
           [](HingeDef& d, py::handle v) {
             d.rest_orientation = v.is_none() ? std::nullopt : std::optional<Quat>(to_quat(v, "hinge.rest_orientation"));
           },
@@ -165,7 +165,7 @@ swing of cone_axis may not exceed cone_half_angle (radians, None: no limit). Onl
 
   auto fixed = bind_def<FixedDef>(m, "FixedDef", "fixed", "Weld: the child pose is P * relative.");
   fixed.def_property(
-      "relative", [](const FixedDef& d) { return from_pose(d.relative); },
+      "relative", [](const FixedDef& d) { return read_only(from_pose(d.relative)); },
       [](FixedDef& d, py::handle v) { d.relative = to_pose(v, "fixed.relative"); },
       "(7,) child pose in the parent frame");
 
@@ -191,7 +191,7 @@ void bind_state(py::module_& m) {
       .def_readonly("child", &JointState::child)
       .def_readonly("value", &JointState::value, "hinge: theta (rad); slider: s (m); ball, fixed: 0")
       .def_readonly("rate", &JointState::rate, "d value / dt")
-      .def_property_readonly("rotation", [](const JointState& s) { return from_quat(s.rotation); },
+      .def_property_readonly("rotation", [](const JointState& s) { return read_only(from_quat(s.rotation)); },
                              "ball: (4,) x, y, z, w, parent frame")
       .def_readonly("violation", &JointState::violation, "metres the joint is pulled apart")
       .def_readonly("overshoot", &JointState::overshoot, "rad (hinge) or m (slider) beyond a limit")
@@ -229,12 +229,12 @@ void bind_world_joints(py::module_& m) {
            py::arg("definition"), "Add a joint; its child snaps onto it. Returns a JointId.")
       .def("remove_joint", [to_joint](World& w, py::handle id) { w.remove_joint(to_joint(id)); }, py::arg("joint"),
            "The child becomes a free body again, keeping its velocity.")
-      .def("joints", &World::joints)
+      .def("joints", &World::joints, "JointIds of the live joints.")
       // Prepended so a JointId reaches this overload before the catch-all one of bind_world.
       .def("contains", [](const World& w, const JointId& id) { return w.contains(id); }, py::arg("joint"),
            py::prepend())
       .def("joint_state", [to_joint](const World& w, py::handle id) { return w.joint_state(to_joint(id)); },
-           py::arg("joint"))
+           py::arg("joint"), "JointState: the joint's value, violation and the last solve of its micro-simulator.")
       .def("set_joint_value",
            [to_joint](World& w, py::handle id, double value) { w.set_joint_value(to_joint(id), value); },
            py::arg("joint"), py::arg("value"),
@@ -342,10 +342,10 @@ child pose best matches it over the child's vertices, within the limits. For tes
 World calls the same functions.)doc");
 
   py::class_<HingeFrame>(s, "HingeFrame", "A validated, normalized hinge (make_hinge_frame).")
-      .def_property_readonly("pivot_parent", [](const HingeFrame& f) { return from_vec3(f.pivot_parent); })
-      .def_property_readonly("axis_parent", [](const HingeFrame& f) { return from_vec3(f.axis_parent); }, "unit")
-      .def_property_readonly("pivot_child", [](const HingeFrame& f) { return from_vec3(f.pivot_child); })
-      .def_property_readonly("rest", [](const HingeFrame& f) { return from_quat(f.rest); }, "R0, (4,) x, y, z, w")
+      .def_property_readonly("pivot_parent", [](const HingeFrame& f) { return read_only(from_vec3(f.pivot_parent)); })
+      .def_property_readonly("axis_parent", [](const HingeFrame& f) { return read_only(from_vec3(f.axis_parent)); }, "unit")
+      .def_property_readonly("pivot_child", [](const HingeFrame& f) { return read_only(from_vec3(f.pivot_child)); })
+      .def_property_readonly("rest", [](const HingeFrame& f) { return read_only(from_quat(f.rest)); }, "R0, (4,) x, y, z, w")
       .def_readonly("lower", &HingeFrame::lower)
       .def_readonly("upper", &HingeFrame::upper);
 
@@ -361,20 +361,20 @@ World calls the same functions.)doc");
       "Validate and normalize a HingeDef (errors name definition.<field>); parent and child may be left unset.");
 
   py::class_<JointVertices>(s, "JointVertices", "A child's model vertices and their moments about the joint point.")
-      .def_property_readonly("points", [](const JointVertices& v) { return from_columns(v.points); },
+      .def_property_readonly("points", [](const JointVertices& v) { return read_only(from_columns(v.points)); },
                              "(N, 3) child frame")
       .def_property_readonly("weights",
                              [](const JointVertices& v) {
-                               return v.weights.size() ? py::object(py::array_t<double>(v.weights.size(), v.weights.data()))
+                               return v.weights.size() ? py::object(read_only(py::array_t<double>(v.weights.size(), v.weights.data())))
                                                        : py::none();
                              },
                              "(N,) or None (all 1)")
-      .def_property_readonly("about", [](const JointVertices& v) { return from_vec3(v.moments.about); })
+      .def_property_readonly("about", [](const JointVertices& v) { return read_only(from_vec3(v.moments.about)); })
       .def_property_readonly("count", [](const JointVertices& v) { return v.moments.count; })
       .def_property_readonly("weight_sum", [](const JointVertices& v) { return v.moments.weight_sum; })
-      .def_property_readonly("first_moment", [](const JointVertices& v) { return from_vec3(v.moments.first); },
+      .def_property_readonly("first_moment", [](const JointVertices& v) { return read_only(from_vec3(v.moments.first)); },
                              "sum w (v - about)")
-      .def_property_readonly("second_moment", [](const JointVertices& v) { return from_mat3(v.moments.second); },
+      .def_property_readonly("second_moment", [](const JointVertices& v) { return read_only(from_mat3(v.moments.second)); },
                              "sum w (v - about)(v - about)^T");
 
   s.def(
@@ -384,7 +384,9 @@ World calls the same functions.)doc");
         Eigen::VectorXd w = weights.is_none() ? Eigen::VectorXd() : to_vector(weights, "weights");
         return make_joint_vertices(std::move(p), std::move(w), to_vec3(about, "about"));
       },
-      py::arg("points"), py::arg("weights") = py::none(), py::arg("about"),
+      // Keyword-only after points: a required `about` cannot follow the optional `weights` in a Python
+      // signature (the generated stub would not parse).
+      py::arg("points"), py::kw_only(), py::arg("weights") = py::none(), py::arg("about"),
       "points (N, 3) in the child frame, weights (N,) or None, about: the joint's point on the child (the\n"
       "hinge's pivot_child); the moments are taken about it.");
 

@@ -16,7 +16,7 @@ using namespace py_convert;
 // A read/write property whose setter converts with a named, shape-checked converter.
 #define HS_VEC3_PROPERTY(cls, T, field, argname)                                              \
   cls.def_property(                                                                           \
-      #field, [](const T& self) { return from_vec3(self.field); },                            \
+      #field, [](const T& self) { return read_only(from_vec3(self.field)); },                 \
       [](T& self, py::handle v) { self.field = to_vec3(v, argname); })
 
 std::string id_repr(const char* kind, uint32_t index, uint32_t generation) {
@@ -61,7 +61,7 @@ void bind_shapes(py::module_& m) {
             auto r = a.mutable_unchecked<2>();
             for (size_t i = 0; i < s.points.size(); ++i)
               for (int k = 0; k < 3; ++k) r(i, k) = s.points[i][k];
-            return a;
+            return read_only(a);
           },
           [](ShapeDef& s, py::handle v) { s.points = to_points(v, "shape.points"); })
       .def_readwrite("indices", &ShapeDef::indices)
@@ -119,7 +119,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("shape", &BodyDef::shape)
       .def_readwrite("mass", &BodyDef::mass)
       .def_property(
-          "pose", [](const BodyDef& d) { return from_pose(d.pose); },
+          "pose", [](const BodyDef& d) { return read_only(from_pose(d.pose)); },
           [](BodyDef& d, py::handle v) { d.pose = to_pose(v, "body.pose"); })
       .def_readwrite("friction", &BodyDef::friction)
       .def_readwrite("restitution", &BodyDef::restitution);
@@ -151,23 +151,24 @@ std::vector<HandFrame> to_frames(py::handle hands) {
 
 void bind_world_class(py::module_& m) {
   py::class_<World>(m, "World", "The simulated scene; step it once per frame.")
-      .def(py::init<const WorldDef&>(), py::arg("definition") = WorldDef())
+      .def(py::init<const WorldDef&>(), py::arg_v("definition", WorldDef(), "WorldDef()"))
       .def_property_readonly("definition", &World::def)
       .def("reset", &World::reset, "Remove everything and reset time; keeps the WorldDef.")
-      .def("add_body", &World::add_body, py::arg("definition"))
+      .def("add_body", &World::add_body, py::arg("definition"),
+           "Add a rigid body (shape, mass, pose, friction ...); returns its BodyId. The definition is copied.")
       .def("remove_body", [](World& w, py::handle id) { w.remove_body(to_body_id(id, "body")); },
-           py::arg("body"))
+           py::arg("body"), "Remove the body; its BodyId becomes stale. InvalidStateError while a joint uses it.")
       .def("contains", [](const World& w, py::handle id) {
         return (py::isinstance<BodyId>(id) && w.contains(id.cast<BodyId>())) ||
                (py::isinstance<HandId>(id) && w.contains(id.cast<HandId>()));
       }, py::arg("id"), "Whether a BodyId or HandId names a live object of this world.")
-      .def("bodies", &World::bodies)
+      .def("bodies", &World::bodies, "BodyIds of the live bodies.")
       .def("body_shape", [](const World& w, py::handle id) { return w.body_shape(to_body_id(id, "body")); },
-           py::arg("body"))
+           py::arg("body"), "A copy of the body's Shape.")
       .def("body_mass", [](const World& w, py::handle id) { return w.body_mass(to_body_id(id, "body")); },
-           py::arg("body"))
+           py::arg("body"), "Mass in kg, as its BodyDef gave it.")
       .def("body_motion", [](const World& w, py::handle id) { return w.body_motion(to_body_id(id, "body")); },
-           py::arg("body"))
+           py::arg("body"), "How the body moves now: STATIC, DYNAMIC, or KINEMATIC (e.g. while grasped).")
       .def("body_pose", [](const World& w, py::handle id) { return from_pose(w.body_pose(to_body_id(id, "body"))); },
            py::arg("body"), "Pose as a (7,) array: x, y, z, qx, qy, qz, qw.")
       .def("set_body_pose",
@@ -175,7 +176,9 @@ void bind_world_class(py::module_& m) {
              BodyId b = to_body_id(id, "body");
              w.set_body_pose(b, to_pose(pose, "pose"));
            },
-           py::arg("body"), py::arg("pose"))
+           py::arg("body"), py::arg("pose"),
+           "Teleport the body to pose (7,): x, y, z, qx, qy, qz, qw. Velocities are kept; a held body stays held\n"
+           "at the new pose.")
       .def("body_velocity",
            [](const World& w, py::handle id) {
              BodyId b = to_body_id(id, "body");
@@ -187,7 +190,8 @@ void bind_world_class(py::module_& m) {
              BodyId b = to_body_id(id, "body");
              w.set_body_velocity(b, to_vec3(lin, "linear"), to_vec3(ang, "angular"));
            },
-           py::arg("body"), py::arg("linear"), py::arg("angular"))
+           py::arg("body"), py::arg("linear"), py::arg("angular"),
+           "Set the linear (m/s) and angular (rad/s) velocity, both (3,) in the world frame.")
       .def("step",
            [](World& w, double dt, py::handle hands) {
              std::vector<HandFrame> frames = to_frames(hands);

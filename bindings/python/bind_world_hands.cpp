@@ -47,7 +47,7 @@ void bind_records(py::module_& m) {
       .def_readonly("grasped", &GraspInfo::grasped)
       .def_property_readonly("primary", [](const GraspInfo& g) { return optional_id(g.primary); }, "HandId or None")
       .def_property_readonly("secondary", [](const GraspInfo& g) { return optional_id(g.secondary); }, "HandId or None")
-      .def_property_readonly("primary_relative", [](const GraspInfo& g) { return from_pose(g.primary_relative); },
+      .def_property_readonly("primary_relative", [](const GraspInfo& g) { return read_only(from_pose(g.primary_relative)); },
                              "(7,) body pose in the primary hand's palm frame")
       .def("__repr__", [](const GraspInfo& g) {
         return "GraspInfo(grasped=" + std::string(g.grasped ? "True" : "False") +
@@ -91,8 +91,9 @@ void bind_world_methods(py::module_& m) {
            py::arg("definition"), py::arg("mesh") = py::none(), py::arg("bind") = py::none(),
            "A hand with the procedural mesh, or with a SkinnedMesh bound at the HandFrame bind (e.g. from\n"
            "handsim.gltf.load_gltf_hand). Frames passed to step drive the hands in the order of hands().")
-      .def("remove_hand", [](World& w, py::handle hand) { w.remove_hand(to_hand_id(hand)); }, py::arg("hand"))
-      .def("hands", &World::hands)
+      .def("remove_hand", [](World& w, py::handle hand) { w.remove_hand(to_hand_id(hand)); }, py::arg("hand"),
+           "Remove the hand (its grasps end); its HandId becomes stale.")
+      .def("hands", &World::hands, "HandIds of the live hands: the order in which step() takes their frames.")
       .def("hand_model",
            [](py::object self, py::handle hand) {
              const HandId id = to_hand_id(hand);
@@ -122,7 +123,7 @@ void bind_world_methods(py::module_& m) {
            },
            py::arg("hand"), "(V, 3) render vertices (model order), skinned on demand, with the local deformation.")
       .def("body_grasp", [](const World& w, py::handle body) { return w.body_grasp(cast_arg<BodyId>(body, "body")); },
-           py::arg("body"))
+           py::arg("body"), "The body's GraspInfo after the last step: grasped, by which hand(s), held where.")
       .def("body_contact_count",
            [](const World& w, py::handle body, py::handle hand) {
              return w.body_contact_count(cast_arg<BodyId>(body, "body"), to_hand_id(hand));

@@ -31,6 +31,17 @@ Quat to_quat(py::handle obj, const std::string& argument);  // x,y,z,w; normalis
 Pose to_pose(py::handle obj, const std::string& argument);  // (7,): x,y,z, qx,qy,qz,qw
 std::vector<Vec3> to_points(py::handle obj, const std::string& argument);  // (N,3)
 
+// Every array the module returns is a fresh copy. A method's result belongs to the caller and is writable;
+// an attribute's array (frame.positions, body_def.pose, ...) is read-only, because a write into it looks like
+// a change of the object but could never reach it: frame.positions[0, 0] = 99 raises "assignment destination
+// is read-only" instead of being silently lost. a.copy() gives a writable one; assigning the whole
+// attribute (body_def.pose = p) changes the object where it has a setter.
+template <class A>
+A read_only(A a) {
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
 py::array_t<double> from_vec3(const Vec3& v);
 py::array_t<double> from_quat(const Quat& q);
 py::array_t<double> from_pose(const Pose& p);

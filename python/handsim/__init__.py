@@ -11,5 +11,6 @@ from ._core import __version__, Error, JOINT_NAMES  # noqa: F401
 
 #: The 26 OpenXR hand joints as an IntEnum (``HandJoint.INDEX_TIP == handsim.INDEX_TIP == 10``).
 HandJoint = _enum.IntEnum("HandJoint", {name.upper(): i for i, name in enumerate(JOINT_NAMES)})
+HandJoint.__doc__ = "The 26 OpenXR hand joints in order: HandJoint.INDEX_TIP == handsim.INDEX_TIP == 10."
 
 from . import gltf  # noqa: E402,F401  (pygltflib itself is imported only when a file is loaded)

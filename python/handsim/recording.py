@@ -42,6 +42,7 @@ class RecordingError(ValueError):
 
 
 def world_def_to_dict(d) -> dict:
+    """The fields of a WorldDef as JSON-ready values (enums by name), as the header stores them."""
     out = {k: getattr(d, k) for k in _WORLD_FIELDS}
     out["gravity"] = [float(v) for v in d.gravity]
     out["particle_contacts"] = d.particle_contacts.name
@@ -50,6 +51,7 @@ def world_def_to_dict(d) -> dict:
 
 
 def world_def_from_dict(data: dict):
+    """The WorldDef of :func:`world_def_to_dict`'s output; an unknown field is a RecordingError naming it."""
     d = _core.WorldDef()
     for k, v in data.items():
         if k == "grasp":
@@ -69,6 +71,7 @@ def world_def_from_dict(data: dict):
 
 
 def hand_def_to_dict(h) -> dict:
+    """The fields of a HandDef as JSON-ready values (enums by name), as the header stores them."""
     out = {k: getattr(h, k) for k in _HAND_FIELDS}
     out["handedness"] = h.handedness.name
     out["sampling"] = h.sampling.name
@@ -76,6 +79,7 @@ def hand_def_to_dict(h) -> dict:
 
 
 def hand_def_from_dict(data: dict):
+    """The HandDef of :func:`hand_def_to_dict`'s output; an unknown field is a RecordingError naming it."""
     h = _core.HandDef()
     for k, v in data.items():
         if k == "handedness":
@@ -108,6 +112,7 @@ class Recording:
 
     @property
     def steps(self) -> int:
+        """Number of recorded steps (S)."""
         return int(len(self.dt))
 
     def frames(self, step: int):
@@ -127,6 +132,7 @@ class Recording:
                 for h, f in enumerate(out)]
 
     def save(self, path) -> Path:
+        """Writes the recording as a format-1 ``.npz`` archive (docs/input.md); returns the path written."""
         path = Path(path)
         header = {"format": FORMAT, "version": FORMAT_VERSION, "handsim": _core.__version__, "scene": self.scene,
                   "scene_params": self.scene_params, "world": self.world, "hands": self.hands, "edits": self.edits,
@@ -177,6 +183,8 @@ def load(path) -> Recording:
 
 
 def check(rec: Recording, name: str = "recording"):
+    """Raises RecordingError, naming `name` and the array, unless every array has the shape and dtype the
+    recording's step and hand counts call for and every edit is a known op before an existing step."""
     s, h = rec.steps, len(rec.hands)
     shapes = {"dt": (s,), "present": (s, h), "positions": (s, h, J, 3), "orientations": (s, h, J, 4),
               "radii": (s, h, J), "valid": (s, h, J)}
@@ -207,6 +215,7 @@ def build_world(rec: Recording):
 
 
 def apply_edit(world, scene, edit: dict):
+    """Applies one recorded scene edit (``{"op": ..., ...}``, objects named as in `scene`) to `world`."""
     op = edit["op"]
     if op == "set_body_pose":
         world.set_body_pose(scene[edit["body"]], edit["pose"])
@@ -252,6 +261,8 @@ class Recorder:
         self._rows = []
 
     def step(self, dt: float, frames: Sequence = ()):
+        """Steps ``self.world`` with one HandFrame per hand (fewer: the last hands are untracked) and records
+        the inputs and the resulting state hash; a step the world rejects raises and records nothing."""
         frames = list(frames or [])
         if len(frames) > len(self._rec.hands):
             raise ValueError(f"frames: {len(frames)} frames for {len(self._rec.hands)} hands")
@@ -273,13 +284,16 @@ class Recorder:
         self._rec.edits.append({"step": len(self._rows), **edit})
 
     def set_body_pose(self, body: str, pose):
+        """Teleports the scene body named `body` to `pose` (7,) now, recorded before the next step."""
         self._edit({"op": "set_body_pose", "body": body, "pose": [float(v) for v in np.asarray(pose, float)]})
 
     def set_body_velocity(self, body: str, linear, angular):
+        """Sets the named body's linear and angular velocity (3,) each now, recorded before the next step."""
         self._edit({"op": "set_body_velocity", "body": body, "linear": [float(v) for v in np.asarray(linear, float)],
                     "angular": [float(v) for v in np.asarray(angular, float)]})
 
     def set_joint_value(self, joint: str, value: float):
+        """Sets the named joint's value (rad or m) now, recorded before the next step."""
         self._edit({"op": "set_joint_value", "joint": joint, "value": float(value)})
 
     def add_box(self, body: str, half_extents, pose, mass: float = 1.0, friction: float = 0.5):
@@ -291,10 +305,12 @@ class Recorder:
                     "friction": float(friction)})
 
     def remove_body(self, body: str):
+        """Removes the named body from the world and the scene now, recorded before the next step."""
         self._edit({"op": "remove_body", "body": body})
 
     @property
     def recording(self) -> Recording:
+        """A Recording of everything so far (a snapshot: later steps do not change it)."""
         r, rows = self._rec, self._rows
         n = len(r.hands)
         stack = lambda key, shape, dtype: (np.stack([row[key] for row in rows]).astype(dtype) if rows
@@ -306,11 +322,14 @@ class Recorder:
             edits=list(r.edits), hashes=np.array([row["hash"] for row in rows], np.uint64))
 
     def save(self, path) -> Path:
+        """Saves :attr:`recording` to `path`; returns the path written."""
         return self.recording.save(path)
 
 
 @dataclasses.dataclass
 class ReplayResult:
+    """What :func:`replay` ends with: the replayed world and scene, the steps run, the last state hash and
+    the first step whose hash differs from the recorded one."""
     world: object
     scene: object
     steps: int
@@ -319,6 +338,7 @@ class ReplayResult:
 
     @property
     def matches(self) -> bool:
+        """Every replayed step's state hash equals the recorded one."""
         return self.first_mismatch is None
 
 

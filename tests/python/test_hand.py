@@ -33,7 +33,8 @@ MOTION = np.array([0.3, 1.1, -0.4, *unit_quat(0.3, -0.5, 0.2, 0.8)])
 
 
 def frame_arrays(frame):
-    return frame.positions, frame.orientations, frame.radii, frame.valid
+    """Writable copies of the frame's arrays (its attributes are read-only)."""
+    return frame.positions.copy(), frame.orientations.copy(), frame.radii.copy(), frame.valid.copy()
 
 
 @pytest.fixture(scope="module")

@@ -41,6 +41,7 @@ _AXES = {"X": 0, "Y": 1, "Z": 2}
 
 @dataclasses.dataclass
 class BvhJoint:
+    """One joint of a BVH hierarchy: its parent, offset, channels and where its channels start in a frame."""
     name: str
     parent: int                 # index into Bvh.joints, -1 for a root
     offset: np.ndarray          # (3,) in file units
@@ -51,11 +52,13 @@ class BvhJoint:
 
 @dataclasses.dataclass
 class Bvh:
+    """A parsed BVH file: the joint hierarchy and one row of channel values per frame."""
     joints: List[BvhJoint]
     frame_time: float
     motion: np.ndarray          # (frames, channels)
 
     def index(self, name):
+        """Index of the joint called `name` in :attr:`joints`, or None."""
         for i, j in enumerate(self.joints):
             if j.name == name:
                 return i
@@ -102,6 +105,7 @@ class BvhError(ValueError):
 
 
 def parse_bvh(text: str, name: str = "bvh") -> Bvh:
+    """Parses BVH text; a malformed file is a BvhError (a ValueError) naming `name` and the line."""
     tokens = []
     for n, line in enumerate(text.splitlines(), 1):
         for tok in line.split():
@@ -256,6 +260,7 @@ def hand_frames(bvh: Bvh, handedness, scale: float = 0.01, joint_map: Dict[str, 
 
 
 def load_bvh(path) -> Bvh:
+    """Reads and parses the BVH file at `path` (:func:`parse_bvh`)."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"path: no such file: {p}")

@@ -48,6 +48,7 @@ def chain(finger: str):
 
 
 def quat_matrix(q):
+    """3x3 rotation matrix of the quaternion q (x, y, z, w; normalised first)."""
     x, y, z, w = np.asarray(q, float) / np.linalg.norm(q)
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
@@ -81,6 +82,7 @@ def cross(a, b):
 
 
 def unit(v, what):
+    """v / |v|, or ValueError "cannot orient <what>" when v is (nearly) zero: two joints coincide."""
     n = math.sqrt(float(v[0]) ** 2 + float(v[1]) ** 2 + float(v[2]) ** 2)
     if not n > 1e-9:
         raise ValueError(f"cannot orient {what}: its joints coincide")
@@ -100,6 +102,8 @@ def orientation(z, x_hint=None, y_hint=None):
 
 
 def palm_orientation(pos, handedness):
+    """The OpenXR palm orientation (x, y, z, w) of joint positions pos (26, 3): -Z from the wrist towards
+    the middle knuckle, X across the knuckles towards the little finger of a right hand (mirrored for left)."""
     along = pos[_core.MIDDLE_PROXIMAL] - pos[_core.WRIST]
     across = pos[_core.LITTLE_PROXIMAL] - pos[_core.INDEX_PROXIMAL]
     if handedness == _core.Handedness.LEFT:
