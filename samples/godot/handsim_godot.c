@@ -134,26 +134,10 @@ static void close_session(Instance* self) {
   self->first_mismatch = -1;
 }
 
-/* Reads the whole file; its size must be exactly what the header says (a truncated copy is an error). */
-static int read_stream(Instance* self, const char* path, unsigned char** out, long* size) {
-  FILE* f = fopen(path, "rb");
-  if (!f) {
-    fail(self, "open: path: cannot open '%s'", path);
-    return 0;
-  }
-  int ok = fseek(f, 0, SEEK_END) == 0 && (*size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0;
-  *out = ok ? malloc(*size > 0 ? (size_t)*size : 1) : NULL;
-  ok = ok && *out && fread(*out, 1, (size_t)*size, f) == (size_t)*size;
-  fclose(f);
-  if (!ok) {
-    free(*out);
-    fail(self, "open: path: cannot read '%s'", path);
-  }
-  return ok;
-}
-
-static int parse_header(Instance* self, const unsigned char* data, long size, const char* path) {
-  if (size < HEADER_BYTES || memcmp(data, "HSFRAMES", 8) != 0) {
+/* Checks the header (data: its first `have` bytes) against the file's size, which must be exactly what the header
+ * says: a truncated or padded copy is an error, and nothing is allocated for a file that is not a stream. */
+static int parse_header(Instance* self, const unsigned char* data, long have, long size, const char* path) {
+  if (have < HEADER_BYTES || memcmp(data, "HSFRAMES", 8) != 0) {
     fail(self, "open: path: '%s' is not a handsim frame stream (no HSFRAMES magic)", path);
     return 0;
   }
@@ -176,6 +160,10 @@ static int parse_header(Instance* self, const unsigned char* data, long size, co
          expected, hands, steps);
     return 0;
   }
+  if (have < HEADER_BYTES + 4 * (long)hands) {
+    fail(self, "open: path: '%s' is cut inside its header", path);
+    return 0;
+  }
   for (uint32_t h = 0; h < hands; ++h) {
     uint32_t side = u32_at(data + HEADER_BYTES + 4 * h);
     if (side != HANDSIM_LEFT && side != HANDSIM_RIGHT) {
@@ -188,6 +176,31 @@ static int parse_header(Instance* self, const unsigned char* data, long size, co
   self->step_count = steps;
   self->step_bytes = (uint32_t)step_bytes;
   return 1;
+}
+
+/* Reads the header, checks it against the file's size, then reads the steps into self->steps. */
+static int read_stream(Instance* self, const char* path) {
+  unsigned char header[HEADER_BYTES + 4 * MAX_HANDS];
+  FILE* f = fopen(path, "rb");
+  if (!f) {
+    fail(self, "open: path: cannot open '%s'", path);
+    return 0;
+  }
+  long size = -1, have = 0;
+  int ok = fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0;
+  if (ok) have = (long)fread(header, 1, sizeof header, f);
+  if (!ok) fail(self, "open: path: cannot read '%s'", path);
+  ok = ok && parse_header(self, header, have, size, path);
+  if (ok) {
+    size_t body = (size_t)self->step_count * self->step_bytes;
+    self->steps = malloc(body > 0 ? body : 1);
+    if (!self->steps) fail(self, "open: out of memory for %u steps", self->step_count);
+    ok = self->steps && fseek(f, HEADER_BYTES + 4L * self->hand_count, SEEK_SET) == 0 &&
+         fread(self->steps, 1, body, f) == body;
+    if (self->steps && !ok) fail(self, "open: path: cannot read '%s'", path);
+  }
+  fclose(f);
+  return ok;
 }
 
 /* The default world, the default jewelry box, and the session's hands with default HandDefs: what the stream's
@@ -216,17 +229,7 @@ static godot_variant m_open(godot_object* o, void* md, void* ud, int n, godot_va
   godot_string path = api->godot_variant_as_string(args[0]);
   godot_char_string utf8 = api->godot_string_utf8(&path);
   const char* p = api->godot_char_string_get_data(&utf8);
-  unsigned char* data = NULL;
-  long size = 0;
-  int ok = read_stream(self, p, &data, &size) && parse_header(self, data, size, p);
-  if (ok) {
-    size_t body = (size_t)self->step_count * self->step_bytes;
-    self->steps = malloc(body > 0 ? body : 1);
-    ok = self->steps != NULL;
-    if (ok) memcpy(self->steps, data + HEADER_BYTES + 4 * self->hand_count, body);
-    else fail(self, "open: out of memory for %u steps", self->step_count);
-  }
-  free(data);
+  int ok = read_stream(self, p);
   api->godot_char_string_destroy(&utf8);
   api->godot_string_destroy(&path);
   ok = ok && build_world(self);

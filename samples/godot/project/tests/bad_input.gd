@@ -49,6 +49,23 @@ func _init():
 	other.store_string("not a frame stream at all, just text")
 	other.close()
 	expect_error(sim, sim.open(work + "/other.hsframes"), false, "open: path:", "a foreign file")
+	# A header that claims 10 million steps in a small file: refused before anything is allocated.
+	var huge = bytes.subarray(0, 27)
+	huge[16] = 0x80
+	huge[17] = 0x96
+	huge[18] = 0x98
+	huge[19] = 0x00
+	var big = File.new()
+	big.open(work + "/huge.hsframes", File.WRITE)
+	big.store_buffer(huge)
+	big.close()
+	expect_error(sim, sim.open(work + "/huge.hsframes"), false, "open: path:", "a header claiming 10^7 steps")
+	expect(sim.last_error().find("expected") >= 0, "the claimed size is named: " + sim.last_error())
+	var head = File.new()
+	head.open(work + "/head.hsframes", File.WRITE)
+	head.store_buffer(bytes.subarray(0, 12))
+	head.close()
+	expect_error(sim, sim.open(work + "/head.hsframes"), false, "open: path:", "a file cut inside its header")
 
 	# An open session is left as it was by bad calls.
 	expect(sim.open(session), "the real session opens: " + sim.last_error())
