@@ -7,6 +7,9 @@
  * Godot and handsim share axes and units (right-handed, Y up, metres), so nothing is converted except the
  * triangle winding: handsim's triangles are counter-clockwise from outside, Godot's front faces clockwise.
  *
+ * Live tracking: create(sides) builds the same scene without a session, and step(dt, frames) takes each hand's 26
+ * joints as Godot values (see frame_from), e.g. from an OpenXR hand-tracking plugin.
+ *
  * Every method checks its arguments; a bad one returns nil/false, prints a Godot error and keeps the message for
  * last_error(), starting with the argument's name, as the C ABI does. Nothing here can crash Godot on bad input. */
 #include <gdnative_api_struct.gen.h>
@@ -35,6 +38,7 @@ enum { HEADER_BYTES = 24, JOINT_BYTES = 72, HAND_BYTES = 8 + HANDSIM_HAND_JOINT_
 
 typedef struct {
   handsim_world* world;
+  int live; /* made by create(): stepped by step(dt, frames), not by a session */
   handsim_jewelry_box box;
   int32_t hand_count;
   int32_t handedness[MAX_HANDS];
@@ -128,6 +132,7 @@ static void close_session(Instance* self) {
   handsim_world_destroy(self->world); /* NULL is a no-op */
   free(self->steps);
   self->world = NULL;
+  self->live = 0;
   self->steps = NULL;
   self->hand_count = 0;
   self->step_count = self->next = 0;
@@ -261,7 +266,7 @@ static godot_variant m_step_next(godot_object* o, void* md, void* ud, int n, god
   (void)o, (void)md, (void)args;
   Instance* self = ud;
   if (!args_ok(self, "step_next", n, 0)) return boolean(0);
-  if (!self->world) {
+  if (!self->world || self->live) {
     fail(self, "step_next: no session is open (call open(path) first)");
     return boolean(0);
   }
@@ -278,6 +283,222 @@ static godot_variant m_step_next(godot_object* o, void* md, void* ud, int n, god
   if (hash != recorded && self->first_mismatch < 0) self->first_mismatch = self->next;
   self->next++;
   return boolean(1);
+}
+
+/* ---- live frames ------------------------------------------------------------------------------------------- */
+
+/* create(sides): the default world and jewelry box with one hand per entry of sides (0 left, 1 right), stepped
+ * by step(dt, frames) with joints from a live tracker instead of a session. */
+static godot_variant m_create(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  if (!args_ok(self, "create", n, 1)) return boolean(0);
+  if (api->godot_variant_get_type(args[0]) != GODOT_VARIANT_TYPE_POOL_INT_ARRAY &&
+      api->godot_variant_get_type(args[0]) != GODOT_VARIANT_TYPE_ARRAY) {
+    fail(self, "create: sides: must be an array of hand sides (0 left, 1 right)");
+    return boolean(0);
+  }
+  godot_pool_int_array sides = api->godot_variant_as_pool_int_array(args[0]);
+  godot_int count = api->godot_pool_int_array_size(&sides);
+  int32_t side[MAX_HANDS];
+  int ok = count >= 1 && count <= MAX_HANDS;
+  if (!ok) fail(self, "create: sides: must hold 1..%d hands, got %d", MAX_HANDS, (int)count);
+  for (godot_int h = 0; ok && h < count; ++h) {
+    side[h] = api->godot_pool_int_array_get(&sides, h);
+    if (side[h] != HANDSIM_LEFT && side[h] != HANDSIM_RIGHT) {
+      fail(self, "create: sides[%d]: must be 0 (left) or 1 (right), got %d", (int)h, (int)side[h]);
+      ok = 0;
+    }
+  }
+  api->godot_pool_int_array_destroy(&sides);
+  if (!ok) return boolean(0);
+  close_session(self);
+  self->hand_count = (int32_t)count;
+  memcpy(self->handedness, side, sizeof(int32_t) * (size_t)count);
+  ok = build_world(self);
+  if (!ok) close_session(self);
+  self->live = ok;
+  return boolean(ok);
+}
+
+/* One hand's frame from {"positions": PoolVector3Array(26), "rotations": Array of 26 Quat, "radii":
+ * PoolRealArray(26) (optional: 0.01 m), "valid": PoolIntArray(26) (optional: all valid)} into self->joints[h].
+ * Only the shape is checked here; the values (finite, unit quaternions) are checked by handsim_step. */
+static int frame_from(Instance* self, int32_t h, const godot_dictionary* d) {
+  enum { J = HANDSIM_HAND_JOINT_COUNT };
+  const char* keys[4] = {"positions", "rotations", "radii", "valid"};
+  godot_variant v[4];
+  int ok = 1;
+  for (int k = 0; k < 4; ++k) {
+    godot_variant key = text(keys[k]);
+    v[k] = api->godot_dictionary_get(d, &key);
+    api->godot_variant_destroy(&key);
+  }
+  const godot_variant_type want[4] = {GODOT_VARIANT_TYPE_POOL_VECTOR3_ARRAY, GODOT_VARIANT_TYPE_ARRAY,
+                                      GODOT_VARIANT_TYPE_POOL_REAL_ARRAY, GODOT_VARIANT_TYPE_POOL_INT_ARRAY};
+  const char* what[4] = {"a PoolVector3Array of 26 positions", "an Array of 26 Quat", "a PoolRealArray of 26 radii",
+                         "a PoolIntArray of 26 valid flags"};
+  for (int k = 0; ok && k < 4; ++k) {
+    godot_variant_type t = api->godot_variant_get_type(&v[k]);
+    if ((k < 2 || t != GODOT_VARIANT_TYPE_NIL) && t != want[k]) {
+      fail(self, "step: frames[%d].%s: must be %s (OpenXR joint order)", h, keys[k], what[k]);
+      ok = 0;
+    }
+  }
+  godot_pool_vector3_array positions = api->godot_variant_as_pool_vector3_array(&v[0]);
+  godot_array rotations = api->godot_variant_as_array(&v[1]);
+  godot_pool_real_array radii = api->godot_variant_as_pool_real_array(&v[2]);
+  godot_pool_int_array valid = api->godot_variant_as_pool_int_array(&v[3]);
+  int has_radii = api->godot_variant_get_type(&v[2]) != GODOT_VARIANT_TYPE_NIL;
+  int has_valid = api->godot_variant_get_type(&v[3]) != GODOT_VARIANT_TYPE_NIL;
+  const int sizes[4] = {api->godot_pool_vector3_array_size(&positions), api->godot_array_size(&rotations),
+                        has_radii ? api->godot_pool_real_array_size(&radii) : J,
+                        has_valid ? api->godot_pool_int_array_size(&valid) : J};
+  for (int k = 0; ok && k < 4; ++k) {
+    if (sizes[k] != J) {
+      fail(self, "step: frames[%d].%s: must hold 26 entries (OpenXR joint order), got %d", h, keys[k], sizes[k]);
+      ok = 0;
+    }
+  }
+  for (int j = 0; ok && j < J; ++j) {
+    godot_variant q = api->godot_array_get(&rotations, j);
+    if (api->godot_variant_get_type(&q) != GODOT_VARIANT_TYPE_QUAT) {
+      fail(self, "step: frames[%d].rotations[%d]: must be a Quat", h, j);
+      ok = 0;
+    } else {
+      godot_quat quat = api->godot_variant_as_quat(&q);
+      godot_vector3 p = api->godot_pool_vector3_array_get(&positions, j);
+      handsim_joint_pose* out = &self->joints[h][j];
+      out->position.x = api->godot_vector3_get_axis(&p, GODOT_VECTOR3_AXIS_X);
+      out->position.y = api->godot_vector3_get_axis(&p, GODOT_VECTOR3_AXIS_Y);
+      out->position.z = api->godot_vector3_get_axis(&p, GODOT_VECTOR3_AXIS_Z);
+      out->orientation.x = api->godot_quat_get_x(&quat);
+      out->orientation.y = api->godot_quat_get_y(&quat);
+      out->orientation.z = api->godot_quat_get_z(&quat);
+      out->orientation.w = api->godot_quat_get_w(&quat);
+      out->radius = has_radii ? api->godot_pool_real_array_get(&radii, j) : 0.01;
+      out->valid = has_valid ? api->godot_pool_int_array_get(&valid, j) != 0 : 1;
+      out->reserved = 0;
+    }
+    api->godot_variant_destroy(&q);
+  }
+  api->godot_pool_vector3_array_destroy(&positions);
+  api->godot_array_destroy(&rotations);
+  api->godot_pool_real_array_destroy(&radii);
+  api->godot_pool_int_array_destroy(&valid);
+  for (int k = 0; k < 4; ++k) api->godot_variant_destroy(&v[k]);
+  return ok;
+}
+
+/* step(dt, frames): frames[i] drives hand i (a Dictionary as in frame_from, or null: untracked this frame);
+ * fewer frames than hands leave the rest untracked. Everything is checked before the world changes. */
+static godot_variant m_step(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  if (!args_ok(self, "step", n, 2)) return boolean(0);
+  if (!self->world || !self->live) {
+    fail(self, "step: no live world (call create(sides) first; a session opened with open() is stepped by step_next)");
+    return boolean(0);
+  }
+  godot_variant_type dt_type = api->godot_variant_get_type(args[0]);
+  if ((dt_type != GODOT_VARIANT_TYPE_REAL && dt_type != GODOT_VARIANT_TYPE_INT) ||
+      api->godot_variant_get_type(args[1]) != GODOT_VARIANT_TYPE_ARRAY) {
+    fail(self, "step: takes (dt: float seconds, frames: Array)");
+    return boolean(0);
+  }
+  double dt = api->godot_variant_as_real(args[0]);
+  godot_array list = api->godot_variant_as_array(args[1]);
+  int32_t count = (int32_t)api->godot_array_size(&list);
+  int ok = count <= self->hand_count;
+  if (!ok) fail(self, "step: frames: %d frames for %d hand(s)", count, self->hand_count);
+  handsim_hand_frame frames[MAX_HANDS];
+  for (int32_t h = 0; ok && h < count; ++h) {
+    godot_variant item = api->godot_array_get(&list, h);
+    godot_variant_type t = api->godot_variant_get_type(&item);
+    if (t == GODOT_VARIANT_TYPE_DICTIONARY) {
+      godot_dictionary d = api->godot_variant_as_dictionary(&item);
+      ok = frame_from(self, h, &d);
+      api->godot_dictionary_destroy(&d);
+    } else if (t == GODOT_VARIANT_TYPE_NIL) {
+      for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) self->joints[h][j].valid = 0; /* untracked */
+    } else {
+      fail(self, "step: frames[%d]: must be a Dictionary of joints or null (untracked)", h);
+      ok = 0;
+    }
+    api->godot_variant_destroy(&item);
+    frames[h].handedness = self->handedness[h];
+    frames[h].joint_count = HANDSIM_HAND_JOINT_COUNT;
+    frames[h].joints = self->joints[h];
+  }
+  api->godot_array_destroy(&list);
+  ok = ok && check(self, handsim_step(self->world, dt, frames, count), "step");
+  return boolean(ok);
+}
+
+/* The session's frame of `hand` at `step`, in step()'s format (null: the hand has no frame there). Godot's Vector3
+ * and Quat are float32, so these are the recorded joints rounded: stepping them need not reach the recorded hashes. */
+static godot_variant m_recorded_frame(godot_object* o, void* md, void* ud, int n, godot_variant** args) {
+  (void)o, (void)md;
+  Instance* self = ud;
+  if (!args_ok(self, "recorded_frame", n, 2)) return nil();
+  if (!self->steps) {
+    fail(self, "recorded_frame: no session is open (call open(path) first)");
+    return nil();
+  }
+  if (api->godot_variant_get_type(args[0]) != GODOT_VARIANT_TYPE_INT ||
+      api->godot_variant_as_int(args[0]) < 0 || api->godot_variant_as_int(args[0]) >= self->step_count) {
+    fail(self, "recorded_frame: step: must be an int in 0..%u", self->step_count - 1);
+    return nil();
+  }
+  int32_t hand;
+  if (!hand_arg(self, "recorded_frame", args + 1, &hand)) return nil();
+  const unsigned char* rec = self->steps + (size_t)api->godot_variant_as_int(args[0]) * self->step_bytes +
+                             STEP_HEAD + (size_t)hand * HAND_BYTES;
+  if (u32_at(rec) == 0) return nil();
+  handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
+  memcpy(joints, rec + 8, sizeof joints);
+  godot_pool_vector3_array positions;
+  godot_array rotations;
+  godot_pool_real_array radii;
+  godot_pool_int_array valid;
+  api->godot_pool_vector3_array_new(&positions);
+  api->godot_array_new(&rotations);
+  api->godot_pool_real_array_new(&radii);
+  api->godot_pool_int_array_new(&valid);
+  for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) {
+    const handsim_joint_pose* jp = &joints[j];
+    godot_vector3 p;
+    godot_quat q;
+    godot_variant qv;
+    api->godot_vector3_new(&p, (godot_real)jp->position.x, (godot_real)jp->position.y, (godot_real)jp->position.z);
+    api->godot_pool_vector3_array_append(&positions, &p);
+    api->godot_quat_new(&q, (godot_real)jp->orientation.x, (godot_real)jp->orientation.y,
+                        (godot_real)jp->orientation.z, (godot_real)jp->orientation.w);
+    api->godot_variant_new_quat(&qv, &q);
+    api->godot_array_append(&rotations, &qv);
+    api->godot_variant_destroy(&qv);
+    api->godot_pool_real_array_append(&radii, (godot_real)jp->radius);
+    api->godot_pool_int_array_append(&valid, jp->valid != 0);
+  }
+  godot_dictionary d;
+  godot_variant value;
+  api->godot_dictionary_new(&d);
+  api->godot_variant_new_pool_vector3_array(&value, &positions);
+  dict_set(&d, "positions", value);
+  api->godot_variant_new_array(&value, &rotations);
+  dict_set(&d, "rotations", value);
+  api->godot_variant_new_pool_real_array(&value, &radii);
+  dict_set(&d, "radii", value);
+  api->godot_variant_new_pool_int_array(&value, &valid);
+  dict_set(&d, "valid", value);
+  api->godot_pool_vector3_array_destroy(&positions);
+  api->godot_array_destroy(&rotations);
+  api->godot_pool_real_array_destroy(&radii);
+  api->godot_pool_int_array_destroy(&valid);
+  godot_variant out;
+  api->godot_variant_new_dictionary(&out, &d);
+  api->godot_dictionary_destroy(&d);
+  return out;
 }
 
 /* ---- queries ------------------------------------------------------------------------------------------------ */
@@ -575,7 +796,8 @@ void ENTRY godot_nativescript_init(void* handle) {
       {"step_count", m_step_count}, {"step_index", m_step_index},     {"hand_count", m_hand_count},
       {"first_mismatch", m_first_mismatch}, {"state_hash", m_state_hash}, {"lid_angle", m_lid_angle},
       {"bodies", m_bodies},       {"events", m_events},               {"hand_vertices", m_hand_vertices},
-      {"hand_indices", m_hand_indices}, {"hand_normals", m_hand_normals},
+      {"hand_indices", m_hand_indices}, {"hand_normals", m_hand_normals}, {"create", m_create},
+      {"step", m_step},           {"recorded_frame", m_recorded_frame},
   };
   godot_method_attributes attributes = {GODOT_METHOD_RPC_MODE_DISABLED};
   for (size_t i = 0; i < sizeof methods / sizeof methods[0]; ++i) {

@@ -2,7 +2,7 @@
 # Runs the Godot sample headless and checks it: lays out a copy of project/ in <work_dir> with the addon folder
 # <addon_dir> (handsim.gdnlib, handsim_world.gdns, bin/x11_64/ with libhandsim_godot.so and libhandsim.so.1: the
 # build's build/dev/samples/godot/addons/handsim or the plugin bundle's godot/addons/handsim) and the session
-# <session.hsframes> (samples/godot/record_session.py writes it), runs HandsimWorld's bad-input checks and the
+# <session.hsframes> (samples/godot/record_session.py writes it), runs HandsimWorld's bad-input and live-frame checks and the
 # project under godot3-server, and checks the result line: every step's hash equal to the recorded one, the final
 # hash equal to the C host's (<expected_hash_file>, one line 0x...), a grasp, a drawn hand mesh.
 #   run_godot.sh <work_dir> <addon_dir> <session.hsframes> <expected_hash_file> [godot args...]
@@ -40,6 +40,8 @@ godot() {  # runs godot3-server on the copy; output in $work/$1.log, exit status
 }
 godot bad_input --script res://tests/bad_input.gd
 bad_rc=$rc
+godot live --script res://tests/live.gd
+live_rc=$rc
 godot godot "$@"
 line=$(grep '^handsim_godot steps' "$work/godot.log" || true)
 if [ -z "$line" ]; then
@@ -52,6 +54,8 @@ expected=$(tr -d '[:space:]' <"$expected_file")
 status=0
 [ $bad_rc = 0 ] && grep -q '^bad_input: [1-9][0-9]* passed, 0 failed' "$work/bad_input.log" ||
   { echo "FAIL: HandsimWorld's bad-input checks (bad_input.log)" >&2; status=1; }
+[ $live_rc = 0 ] && grep -q '^live: [1-9][0-9]* passed, 0 failed' "$work/live.log" ||
+  { echo "FAIL: HandsimWorld's live frames (live.log)" >&2; status=1; }
 [ $rc = 0 ] || { echo "FAIL: godot3-server exited with $rc" >&2; status=1; }
 [ "$mismatch" = -1 ] || { echo "FAIL: step $mismatch's hash differs from the Python recording's" >&2; status=1; }
 [ "$godot_hash" = "$expected" ] || { echo "FAIL: Godot $godot_hash vs C host $expected" >&2; status=1; }
