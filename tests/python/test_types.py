@@ -2,8 +2,8 @@
 class and method has a docstring, and arrays handsim returns are read-only copies.
 
 The public API is the top-level ``handsim`` namespace and the modules users import (``handsim.gltf``,
-``handsim.recording``, ``handsim.scenes``, ``handsim.adapters.*``); the command-line tools (bench,
-experiments, replay, input_report, users, plots, render) are not walked."""
+``handsim.recording``, ``handsim.frame_stream``, ``handsim.scenes``, ``handsim.adapters.*``); the command-line
+tools (bench, experiments, replay, input_report, users, plots, render) are not walked."""
 import importlib
 import inspect
 import os
@@ -22,7 +22,7 @@ from handsim import adapters
 from test_docs import BLOCKS, ROOT, block_id, skip_reason
 
 RIGHT = handsim.Handedness.RIGHT
-API_MODULES = ["handsim", "handsim.gltf", "handsim.recording", "handsim.scenes"] + [
+API_MODULES = ["handsim", "handsim.gltf", "handsim.recording", "handsim.frame_stream", "handsim.scenes"] + [
     f"handsim.adapters.{m.name}" for m in pkgutil.iter_modules(adapters.__path__) if not m.name.startswith("_")]
 
 
