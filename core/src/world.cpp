@@ -4,8 +4,12 @@
 #include "validate.h"
 #include "world_impl.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <mutex>
+#include <vector>
 
 namespace handsim {
 namespace {
@@ -23,6 +27,30 @@ uint32_t world_salt(const void* impl) {
   return uint32_t(x % 4095) + 1;
 }
 
+
+bool same_hand_def(const HandDef& a, const HandDef& b) {
+  // every field of HandDef (a field added there must be added here)
+  return a.handedness == b.handedness && a.particle_count == b.particle_count && a.sampling == b.sampling &&
+         a.seed == b.seed && a.particle_radius == b.particle_radius && a.render_vertices == b.render_vertices;
+}
+
+// Building the procedural hand (mesh, skin groups, particles) takes ~0.2 s and depends only on the HandDef, and
+// a built model is immutable, so worlds alive at the same time share the model of an equal definition. Tools
+// that build many short-lived worlds (the intent judge: one per placement) spent most of their time here. Only
+// weak references are kept: a model is freed with the last world using it, as before.
+std::shared_ptr<const HandModel> shared_hand_model(const HandDef& def) {
+  static std::mutex mutex;
+  static std::vector<std::pair<HandDef, std::weak_ptr<const HandModel>>> live;
+  std::lock_guard<std::mutex> lock(mutex);
+  live.erase(std::remove_if(live.begin(), live.end(), [](const auto& e) { return e.second.expired(); }),
+             live.end());
+  for (const auto& [d, model] : live)
+    if (same_hand_def(d, def))
+      if (auto shared = model.lock()) return shared;
+  auto model = std::make_shared<const HandModel>(build_hand_model(def));
+  live.emplace_back(def, model);
+  return model;
+}
 
 BodyMotion motion_of(const BodyDef& def) {
   if (def.kinematic) return BodyMotion::Kinematic;
@@ -184,10 +212,7 @@ std::string World::stage_summary() const {
 
 // --- hands ---
 
-HandId World::add_hand(const HandDef& def) {
-  auto model = std::make_shared<const HandModel>(build_hand_model(def));
-  return impl_->add_hand(def, std::move(model));
-}
+HandId World::add_hand(const HandDef& def) { return impl_->add_hand(def, shared_hand_model(def)); }
 
 HandId World::add_hand(const HandDef& def, const SkinnedMesh& mesh, const HandFrame& bind) {
   auto model = std::make_shared<const HandModel>(build_hand_model(def, mesh, bind));
