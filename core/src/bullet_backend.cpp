@@ -5,6 +5,7 @@
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -91,9 +92,14 @@ struct BulletBackend::Impl {
   std::vector<int> free_handles;
   std::vector<std::unique_ptr<btTypedConstraint>> constraints;  // null: a free constraint slot
   Entry ground;
+  bool woken = true;                 // see BulletBackend::woken
+  std::vector<int> moved_kinematic;  // kinematic bodies moved since the last step or idle
 
   explicit Impl(const WorldDef& def) {
     world.setGravity(bt(def.gravity));
+    // Bounds of sleeping and static bodies do not move, so Bullet need not recompute them every substep
+    // (its default does, for every object: 1,000 static boxes cost ~240 us a step).
+    world.setForceUpdateAllAabbs(false);
     world.getSolverInfo().m_numIterations = def.solver_iterations;
     if (def.ground) {
       // A large box rather than btStaticPlaneShape: box-box contact gives a full four-point manifold at
@@ -105,6 +111,7 @@ struct BulletBackend::Impl {
       info.m_startWorldTransform.setOrigin(btVector3(0, def.ground_height - 1.0, 0));
       info.m_friction = def.ground_friction;
       ground.body = std::make_unique<btRigidBody>(info);
+      ground.body->forceActivationState(ISLAND_SLEEPING);  // static: see apply_motion
       world.addRigidBody(ground.body.get());
     }
   }
@@ -127,9 +134,29 @@ struct BulletBackend::Impl {
     if (motion == BodyMotion::Kinematic) flags |= btCollisionObject::CF_KINEMATIC_OBJECT;
     if (motion == BodyMotion::Static) flags |= btCollisionObject::CF_STATIC_OBJECT;
     body.setCollisionFlags(flags);
-    // Kinematic bodies are driven every frame by the hand; letting them sleep would freeze contacts.
-    body.forceActivationState(motion == BodyMotion::Kinematic ? DISABLE_DEACTIVATION : ACTIVE_TAG);
+    // Kinematic bodies are driven every frame by the hand; letting them sleep would freeze contacts. Static
+    // bodies are asleep from the start: Bullet then neither updates their bounds nor collides them with
+    // sleeping bodies, and still collides them with awake ones (a pair is skipped only when both sleep).
+    body.forceActivationState(motion == BodyMotion::Kinematic ? DISABLE_DEACTIVATION
+                              : motion == BodyMotion::Static  ? ISLAND_SLEEPING
+                                                              : ACTIVE_TAG);
     body.updateInertiaTensor();
+  }
+
+  // Wakes the dynamic bodies whose bounds touch `body`'s (Bullet's bounds carry its contact margin).
+  void wake_touching(btRigidBody& body) {
+    btVector3 lo, hi;
+    body.getAabb(lo, hi);
+    // Grown by Bullet's contact breaking threshold: a body resting on another keeps its contact that far.
+    const btVector3 grow(gContactBreakingThreshold, gContactBreakingThreshold, gContactBreakingThreshold);
+    lo -= grow;
+    hi += grow;
+    for (Entry& e : entries) {
+      if (!e.body || e.body.get() == &body || e.body->isStaticOrKinematicObject()) continue;
+      btVector3 elo, ehi;
+      e.body->getAabb(elo, ehi);
+      if (TestAabbAgainstAabb2(lo, hi, elo, ehi)) e.body->activate(true);
+    }
   }
 
   btRigidBody& rigid(int handle) {
@@ -137,6 +164,7 @@ struct BulletBackend::Impl {
   }
 
   int add_constraint(std::unique_ptr<btTypedConstraint> c) {
+    woken = true;
     // Linked bodies do not collide with each other: the joint is what keeps them apart.
     world.addConstraint(c.get(), true);
     for (size_t i = 0; i < constraints.size(); ++i)
@@ -219,6 +247,7 @@ int BulletBackend::add_fixed(int parent, int child, const FixedFrame& f) {
 }
 
 void BulletBackend::remove_constraint(int handle) {
+  impl_->woken = true;
   impl_->world.removeConstraint(impl_->constraints[handle].get());
   impl_->constraints[handle].reset();
 }
@@ -226,6 +255,7 @@ void BulletBackend::remove_constraint(int handle) {
 void BulletBackend::set_collision(int a, int b, bool enabled) {
   btRigidBody& ra = impl_->rigid(a);
   btRigidBody& rb = impl_->rigid(b);
+  impl_->woken = true;
   ra.setIgnoreCollisionCheck(&rb, !enabled);
   rb.setIgnoreCollisionCheck(&ra, !enabled);
 }
@@ -245,6 +275,7 @@ int BulletBackend::add(const BodyDef& def, BodyMotion motion) {
   e.body->setLinearVelocity(bt(def.linear_velocity));
   e.body->setAngularVelocity(bt(def.angular_velocity));
   impl_->world.addRigidBody(e.body.get());
+  impl_->woken = true;
 
   int handle;
   if (!impl_->free_handles.empty()) {
@@ -261,6 +292,9 @@ int BulletBackend::add(const BodyDef& def, BodyMotion motion) {
 void BulletBackend::remove(int handle) {
   Impl::Entry& e = impl_->entries[handle];
   impl_->world.removeRigidBody(e.body.get());
+  // Bullet does not wake what rested on a removed body; wake every body whose bounds touched it.
+  impl_->wake_touching(*e.body);
+  impl_->woken = true;
   e = Impl::Entry();
   impl_->free_handles.push_back(handle);
 }
@@ -271,10 +305,22 @@ void BulletBackend::set_motion(int handle, BodyMotion motion, double mass) {
   impl_->world.removeRigidBody(&body);
   Impl::apply_motion(body, motion, mass);
   impl_->world.addRigidBody(&body);
+  impl_->woken = true;
 }
 
 void BulletBackend::write(int handle, const Pose& pose, const Vec3& linear, const Vec3& angular) {
   btRigidBody& body = *impl_->entries[handle].body;
+  impl_->woken = true;
+  if (body.isStaticObject()) {
+    // A moved static body stays asleep (see apply_motion) with its bounds brought up to date; what rested
+    // on it where it was, or is hit by it where it is now, wakes.
+    impl_->wake_touching(body);
+    body.setWorldTransform(bt(pose));
+    body.setInterpolationWorldTransform(bt(pose));
+    impl_->world.updateSingleAabb(&body);
+    impl_->wake_touching(body);
+    return;
+  }
   body.setWorldTransform(bt(pose));
   body.setInterpolationWorldTransform(bt(pose));
   body.setLinearVelocity(bt(linear));
@@ -282,10 +328,12 @@ void BulletBackend::write(int handle, const Pose& pose, const Vec3& linear, cons
   body.setInterpolationLinearVelocity(bt(linear));
   body.setInterpolationAngularVelocity(bt(angular));
   body.activate(true);
+  if (body.isKinematicObject()) impl_->moved_kinematic.push_back(handle);
 }
 
 void BulletBackend::move_kinematic(int handle, const Pose& pose) {
   impl_->entries[handle].body->setWorldTransform(bt(pose));
+  impl_->moved_kinematic.push_back(handle);
 }
 
 void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const {
@@ -295,9 +343,30 @@ void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) co
   angular = from_bt(body.getAngularVelocity());
 }
 
+bool BulletBackend::awake(int handle) const { return impl_->entries[handle].body->isActive(); }
+
+bool BulletBackend::woken() const { return impl_->woken; }
+
 void BulletBackend::step(double h) {
   // maxSubSteps = 0: Bullet takes exactly one step of length h; the world does the substepping.
   impl_->world.stepSimulation(h, 0, h);
+  impl_->woken = false;
+  impl_->moved_kinematic.clear();
+}
+
+void BulletBackend::idle(double h) {
+  // What stepSimulation does first for every kinematic body (saveKinematicState): its velocity over the
+  // substep and the transform the next one starts from. Unmoved kinematic bodies keep zero velocity.
+  std::vector<int>& moved = impl_->moved_kinematic;
+  std::sort(moved.begin(), moved.end());
+  moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  for (int handle : moved) {
+    btRigidBody* body = impl_->entries[handle].body.get();
+    if (body && body->isKinematicObject()) body->saveKinematicState(h);
+  }
+  // A kinematic body that did not move keeps its transform as the next start: nothing to save for it (its
+  // velocity is recomputed by the next real step, which starts with the same save).
+  moved.clear();
 }
 
 }  // namespace handsim

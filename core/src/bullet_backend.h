@@ -27,7 +27,17 @@ class BulletBackend {
   // Move a kinematic body for the coming substep; Bullet derives its velocity from the change.
   void move_kinematic(int handle, const Pose& pose);
   void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
+  // Whether Bullet still simulates a dynamic body; false once it has fallen asleep (at rest for Bullet's
+  // deactivation time), until something wakes it (a write, a contact with a moving body).
+  bool awake(int handle) const;
+  // Whether anything was written (pose, velocity, motion, body or constraint added) since the last
+  // step or idle: then the next substep must run Bullet even if every dynamic body sleeps.
+  bool woken() const;
   void step(double h);
+  // A substep in which no dynamic body is awake and nothing moving comes near one: Bullet would change no
+  // dynamic body, so it is skipped. Only the bookkeeping a real step does for kinematic bodies is done
+  // (their velocity over the substep), so a later real step does not see a whole pause as one jump.
+  void idle(double h);
 
   // Soft joints (the JointModel::Soft baseline): Bullet constraints between two body handles, -1 for the
   // world. Each returns a constraint handle.

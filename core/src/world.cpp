@@ -143,6 +143,8 @@ BodyId World::add_body(const BodyDef& in) {
   b.unit_inertia = shape_unit_inertia(def.shape);
   b.backend = w.backend->add(def, b.motion);
   ++w.body_version;
+  ++w.motion_version;
+  w.update_box(index);
   return {index, b.generation};
 }
 
@@ -165,6 +167,8 @@ void World::remove_body(BodyId id) {
   w.backend->remove(b.backend);
   release_slot(w.bodies, w.free_body_slots, id.index);
   ++w.body_version;
+  ++w.motion_version;
+  w.update_box(id.index);
 }
 
 bool World::contains(BodyId id) const {
@@ -287,7 +291,9 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
   // Without this the attach stage would put a held body straight back into the hand.
   impl_->retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
+  impl_->update_box(id.index);
   if (!impl_->joint_order.empty()) impl_->place_children();
+  impl_->refresh_moving_boxes();
 }
 
 void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular) {

@@ -41,6 +41,8 @@ struct Body {
   // Released by its hand in this step: it leaves with the hand's velocity, which the object-centred update
   // must not replace in the same step (the fingers that just let go still press it by the grip's depth).
   bool just_released = false;
+  // Dynamic: Bullet had it asleep when last read, so it has not moved since (read_dynamic_bodies).
+  bool read_asleep = false;
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
   bool jointed() const { return hard_joint >= 0; }
@@ -142,6 +144,16 @@ struct World::Impl {
   // that removals raised after it, so a caller who reads events() after each step sees those too.
   size_t step_events = 0;
   std::vector<StageReport> reports;
+  // What moves (world_activity.cpp). body_boxes: every body slot's world bounds, 6 doubles (lo xyz, hi xyz;
+  // empty for a dead slot), in one flat array: the hand-body broadphase scans it instead of the bodies. The
+  // lists are what the per-step passes walk instead of every body, so settled and static bodies cost nothing.
+  std::vector<double> body_boxes;
+  std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
+  std::vector<uint32_t> released;  // bodies whose just_released is set
+  std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
+  uint64_t motion_version = 1, dynamic_version = 0;
+  int awake_bodies = 0;            // dynamic bodies Bullet still simulated after the last substep it ran
+  uint64_t idle_substeps = 0;      // substeps in which Bullet was skipped (nothing awake)
   double time = 0;
   double accumulator = 0;
   const uint32_t salt;
@@ -206,7 +218,16 @@ struct World::Impl {
   std::string retake_secondary_hands();
 
   void validate_step(double dt, const std::vector<HandFrame>& frames) const;
-  void substep(double h, int i, int n);
+  void substep(double h, int i, int n, bool physics);
+
+  // What moves (world_activity.cpp).
+  void update_box(uint32_t body);
+  void refresh_moving_boxes();
+  bool box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const;
+  const std::vector<uint32_t>& held_bodies();
+  const std::vector<uint32_t>& dynamic_bodies();
+  bool physics_needed(double dt);
+  void read_dynamic_bodies();
 };
 
 uint32_t next_generation(uint32_t generation);

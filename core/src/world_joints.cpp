@@ -305,8 +305,9 @@ void World::Impl::integrate_joints(double h) {
 // --- soft joints: a grasped child chases its hand with a velocity, the constraint pulls back ---
 
 void World::Impl::drive_soft_children(double h) {
-  for (Body& b : bodies) {
-    if (!b.alive || b.soft_joint < 0 || !b.grasp.grasped) continue;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.soft_joint < 0) continue;
     const Pose target = hands[b.grasp.primary.index].palm * b.grasp.primary_relative;
     b.linear = (target.position - b.pose.position) / h;
     b.angular = rotation_vector(target.orientation * b.pose.orientation.conjugate()) / h;

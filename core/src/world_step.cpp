@@ -18,6 +18,7 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
   w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(std::min(w.step_events, w.events.size())));
   w.reports.clear();
+  w.refresh_moving_boxes();
   auto stage = [&w](const char* name, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
     std::string why = run();
@@ -120,14 +121,7 @@ void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
 // Whether a box (a hand's coarse bounds) comes within the release distance of any body's bounds: the widest
 // margin detect_contacts uses, so a hand that fails this test cannot have a contact.
 bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
-  const Vec3 margin = Vec3::Constant(def.grasp.release_distance);
-  for (const Body& b : bodies) {
-    if (!b.alive) continue;
-    Vec3 blo, bhi;
-    shape_world_bounds(b.shape, b.pose, blo, bhi);
-    if (bounds_overlap(lo - margin, hi + margin, blo, bhi)) return true;
-  }
-  return false;
+  return box_near_any_body(lo, hi, def.grasp.release_distance);
 }
 
 void World::Impl::skin_render_mesh(HandSlot& h) {
@@ -226,13 +220,16 @@ std::string World::Impl::detect_contacts(double dt) {
     const double radius = h.model->particle_radius;
     if (bullet || def.paper_pipeline) refresh_particles(h, false);
     if (bullet) collide_bullet_particles(hi, per_body);
+    const Vec3 reach = Vec3::Constant(def.grasp.release_distance);
     for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
+      // The broadphase: the flat box array first (the widest margin), the body itself only when near.
+      const Vec3 lo = Eigen::Map<const Vec3>(&body_boxes[6 * bi]), hi_b = Eigen::Map<const Vec3>(&body_boxes[6 * bi + 3]);
+      if (!def.paper_pipeline && !bounds_overlap(h.state.bounds_lo - reach, h.state.bounds_hi + reach, lo, hi_b))
+        continue;
       Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
       const double margin = b.held_by(hi) ? def.grasp.release_distance : 0.0;
-      Vec3 lo, hi_b;
-      shape_world_bounds(b.shape, b.pose, lo, hi_b);
       if (!def.paper_pipeline &&
           !bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
                           lo, hi_b))
@@ -407,6 +404,7 @@ void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
   const HandSlot& h = hands[hi];
   if (!b.grasp.grasped) {
     b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
+    held.push_back(bi);
     // A free body is attached to the hand. A joint's child is not: the hand only tells the joint where it
     // wants the child (hard: solve_joints; soft: a velocity drive against the Bullet constraint).
     if (!b.jointed() && b.soft_joint < 0) set_motion(b, BodyMotion::Kinematic);
@@ -451,6 +449,7 @@ void World::Impl::hand_over(Body& b) {
 void World::Impl::release(Body& b, const BodyVelocity& velocity) {
   b.grasp = GraspInfo();
   b.just_released = true;
+  released.push_back(uint32_t(&b - bodies.data()));
   b.linear = velocity.linear;
   b.angular = velocity.angular;
   set_motion(b, BodyMotion::Dynamic);
@@ -475,24 +474,27 @@ void World::Impl::set_motion(Body& b, BodyMotion motion) {
   if (b.motion == motion) return;
   backend->set_motion(b.backend, motion, b.mass);
   b.motion = motion;
+  b.read_asleep = false;
+  ++motion_version;
   b.synced_pose = b.pose;
   backend->write(b.backend, b.pose, b.linear, b.angular);
 }
 
 // --- lines 10, 14: a grasped object keeps its pose relative to its primary hand ---
 std::string World::Impl::follow_primary_hands() {
-  int held = 0;
-  for (Body& b : bodies) {
-    if (!b.alive || !b.grasp.grasped || b.jointed() || b.soft_joint >= 0) continue;
+  int following = 0;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.jointed() || b.soft_joint >= 0) continue;
     const HandSlot& h = hands[b.grasp.primary.index];
     b.pose = h.palm * b.grasp.primary_relative;
     const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
     b.linear = v.linear;
     b.angular = v.angular;
-    ++held;
+    ++following;
   }
-  if (held == 0) return "skip: nothing grasped";
-  return std::to_string(held) + " grasped body(ies) follow their hand";
+  if (following == 0) return "skip: nothing grasped";
+  return std::to_string(following) + " grasped body(ies) follow their hand";
 }
 
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
@@ -510,9 +512,8 @@ std::string World::Impl::follow_primary_hands() {
 std::string World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3> from, to;
   std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
-  for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
-    const Body& b = bodies[bi];
-    if (!b.alive || !b.grasp.grasped) continue;  // an unjointed held body is its own group and is not fitted
+  for (uint32_t bi : held_bodies()) {
+    const Body& b = bodies[bi];  // an unjointed held body is its own group and is not fitted
     held_groups.push_back({b.grasp.primary.index, group_root(bi)});
     if (!b.grasp.secondary.is_null()) held_groups.push_back({b.grasp.secondary.index, group_root(bi)});
   }
@@ -521,17 +522,27 @@ std::string World::Impl::fit_touched_bodies(double dt) {
     return std::find(held_groups.begin(), held_groups.end(), key) != held_groups.end();
   };
   int fitted = 0;
-  for (Body& b : bodies) b.supported = false;
-  for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
+  for (uint32_t k : joint_order) bodies[joints[k].child].supported = false;  // only joints' children are
+  // The touched bodies in slot order (the pairs are ordered by hand first), each with its pairs.
+  std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> touched;
+  for (const auto& entry : pairs)
+    if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
+  std::stable_sort(touched.begin(), touched.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (size_t t = 0; t < touched.size();) {
+    const uint32_t bi = touched[t].first;
+    size_t end = t;
+    while (end < touched.size() && touched[end].first == bi) ++end;
     Body& b = bodies[bi];
-    const bool just_released = b.just_released;
-    b.just_released = false;
-    if (!b.manipulable() || b.grasp.grasped || just_released) continue;
+    const size_t first = t;
+    t = end;
+    if (!b.manipulable() || b.grasp.grasped || b.just_released) continue;
     from.clear();
     to.clear();
     BodyVelocity carried;
-    for (auto& entry : pairs) {
-      if (entry.first.second != bi || holds_group_of(entry.first.first, bi)) continue;
+    for (size_t e = first; e < end; ++e) {
+      const auto& entry = *touched[e].second;
+      if (holds_group_of(entry.first.first, bi)) continue;
       const size_t before = from.size();
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
@@ -562,6 +573,8 @@ std::string World::Impl::fit_touched_bodies(double dt) {
     backend->write(b.backend, b.pose, b.linear, b.angular);
     ++fitted;
   }
+  for (uint32_t bi : released) bodies[bi].just_released = false;
+  released.clear();
   if (fitted == 0) return "skip: no free body touched";
   return std::to_string(fitted) + " touched body(ies) fitted";
 }
@@ -576,44 +589,39 @@ std::string World::Impl::simulate(double dt) {
     n = def.max_substeps;
     accumulator = n * h;  // drop what cannot be caught up
   }
-  for (int i = 0; i < n; ++i) substep(h, i, n);
+  const bool physics = n > 0 && physics_needed(dt);
+  for (int i = 0; i < n; ++i) substep(h, i, n, physics);
   accumulator = std::max(0.0, accumulator - n * h);
   if (n > 0)
-    for (Body& b : bodies)
-      if (b.alive && b.motion == BodyMotion::Kinematic && !b.jointed()) b.synced_pose = b.pose;
+    for (uint32_t bi : held_bodies())
+      if (bodies[bi].motion == BodyMotion::Kinematic && !bodies[bi].jointed()) bodies[bi].synced_pose = bodies[bi].pose;
   if (n == 0) return "skip: dt shorter than one substep (accumulated)";
+  if (!physics)
+    return std::to_string(n) + " substep(s) without Bullet: no dynamic body awake" +
+           (joint_order.empty() ? "" : ", hard joints integrated");
   return std::to_string(n) + " substep(s)";
 }
 
-void World::Impl::substep(double h, int i, int n) {
+void World::Impl::substep(double h, int i, int n, bool physics) {
   // Kinematic bodies glide from the pose Bullet last saw to their target over the frame's substeps, so
-  // Bullet derives the right velocity for pushing free bodies.
+  // Bullet derives the right velocity for pushing free bodies. (Declared kinematic bodies only move through
+  // set_body_pose, which syncs them; the held ones are the gliders.)
   const double s = double(i + 1) / n;
-  for (Body& b : bodies) {
-    if (!b.alive || b.motion != BodyMotion::Kinematic || b.jointed()) continue;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.motion != BodyMotion::Kinematic || b.jointed()) continue;
+    if (!physics && i + 1 < n) continue;  // nothing sees the glide; only where it ends
     Pose p{b.synced_pose.position + s * (b.pose.position - b.synced_pose.position),
            b.synced_pose.orientation.slerp(s, b.pose.orientation)};
     backend->move_kinematic(b.backend, i + 1 == n ? b.pose : p);
   }
   drive_soft_children(h);
-  backend->step(h);
-  for (Body& b : bodies) {
-    if (!b.alive || b.motion != BodyMotion::Dynamic) continue;
-    Pose pose;
-    Vec3 linear, angular;
-    backend->read(b.backend, pose, linear, angular);
-    if (pose.position.allFinite() && pose.orientation.coeffs().allFinite() && linear.allFinite() &&
-        angular.allFinite()) {
-      b.pose = pose;
-      b.linear = linear;
-      b.angular = angular;
-    } else {
-      // Safety net: the fuzz driver found Bullet returning NaN for two deeply overlapping, fast-spinning
-      // boxes. The body keeps its last finite pose, at rest, instead of poisoning the world.
-      b.linear = b.angular = Vec3::Zero();
-      backend->write(b.backend, b.pose, b.linear, b.angular);
-      ++nonfinite_recoveries;
-    }
+  if (physics) {
+    backend->step(h);
+    read_dynamic_bodies();
+  } else {
+    backend->idle(h);
+    ++idle_substeps;
   }
   if (!joint_order.empty()) {
     integrate_joints(h);
@@ -624,8 +632,9 @@ void World::Impl::substep(double h, int i, int n) {
 // --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
 std::string World::Impl::retake_secondary_hands() {
   int slipping = 0;
-  for (Body& b : bodies) {
-    if (!b.alive || b.grasp.secondary.is_null()) continue;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.grasp.secondary.is_null()) continue;
     b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
     ++slipping;
   }

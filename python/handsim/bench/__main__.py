@@ -12,6 +12,7 @@ BENCHMARKS = {
     "hand": "handsim.bench.hand",
     "joints": "handsim.bench.joints",
     "particles": "handsim.bench.particles",
+    "peers": "handsim.bench.peers",
     "step": "handsim.bench.step",
     "world": "handsim.bench.world",
 }

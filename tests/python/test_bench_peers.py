@@ -1,0 +1,20 @@
+"""The peers benchmark (issue 25): its JSON shape and handsim's accuracy in it, never its times."""
+from handsim.bench import peers
+
+
+def test_peers_one_repetition():
+    doc = peers.run(quick=True, repeats=1)
+    assert set(doc["scenes"]) == {"lid_drag", "cube_carry"}
+    for scene, rows in doc["scenes"].items():
+        mine = [r for r in rows if r["engine"].startswith("handsim")]
+        assert mine and all(r["median_s"] > 0 for r in mine)
+        for r in mine:
+            # the hand holds the lid on its hinge and where the grip puts it, the cube where the hand holds it
+            assert r["hinge_error_m"] < 1e-9
+            assert r["lag"] < 1e-6
+        for r in rows:
+            assert "skipped" in r or r["fastest_s"] <= r["median_s"]
+            if "handsim_over_peer" in r:
+                assert set(r["handsim_over_peer"]) == {m["engine"] for m in mine}
+    assert isinstance(doc["goal_met"], bool)
+    assert "lid_drag" in peers.table(doc)
