@@ -134,4 +134,28 @@ void deform_particles(const HandModel& model, HandState& state, const std::vecto
   state.displaced.erase(std::unique(state.displaced.begin(), state.displaced.end()), state.displaced.end());
 }
 
+void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
+                        const std::vector<ParticleContact>& contacts, std::vector<int>& displaced,
+                        std::vector<Vec3>& centres) {
+  const double r = model.particle_radius;
+  // (particle, contact) for every contact whose centre is inside, stably by particle: each particle then adds
+  // its corrections in contact order, as deform_particles does in its pass over the contacts.
+  std::vector<std::pair<int, int>> inside;
+  for (size_t c = 0; c < contacts.size(); ++c)
+    if (contacts[c].depth > r) inside.push_back({contacts[c].particle, int(c)});
+  std::stable_sort(inside.begin(), inside.end(),
+                   [](const std::pair<int, int>& a, const std::pair<int, int>& b) { return a.first < b.first; });
+  displaced.clear();
+  centres.clear();
+  for (size_t i = 0; i < inside.size();) {
+    const int p = inside[i].first;
+    if (p < 0 || p >= tracked.cols())
+      validate::fail("contacts[" + std::to_string(inside[i].second) + "].particle", "out of range: " + std::to_string(p));
+    Vec3 x = tracked.col(p);
+    for (; i < inside.size() && inside[i].first == p; ++i) x += contacts[inside[i].second].point - tracked.col(p);
+    displaced.push_back(p);
+    centres.push_back(x);
+  }
+}
+
 }  // namespace handsim

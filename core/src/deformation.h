@@ -12,6 +12,12 @@ namespace handsim {
 // uniform push uniform. Vertices with no particle within R never move.
 void build_falloff(HandModel& model);
 
+// deform_particles without the full matrix: the displaced particles (sorted) and their deformed centres,
+// with the same arithmetic (so the same bits) as deform_particles gives them.
+void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
+                        const std::vector<ParticleContact>& contacts, std::vector<int>& displaced,
+                        std::vector<Vec3>& centres);
+
 // out.col(v) += sum over displaced particles p of w_vp * (deformed_p - tracked_p).
 void apply_render_deformation(const HandModel& model, const HandState& state, Eigen::Matrix3Xd& out);
 

@@ -249,14 +249,62 @@ HandReach build_hand_reach(const HandModel& model) {
   r.reach.fill(-1.0);
   for (int j = 0; j < kHandJointCount; ++j) r.bind_joint[j] = model.bind.joints[j].position;
   const SkinLayout& L = model.particle_skin;
-  for (const SkinGroup& g : L.groups)
-    for (int k = 0; k < g.count; ++k)
-      for (int i = g.begin; i < g.end; ++i) {
-        const Vec3 p(L.bind_xyz[0][i], L.bind_xyz[1][i], L.bind_xyz[2][i]);
+  for (const SkinGroup& g : L.groups) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (int i = g.begin; i < g.end; ++i) {
+      const Vec3 p(L.bind_xyz[0][i], L.bind_xyz[1][i], L.bind_xyz[2][i]);
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      for (int k = 0; k < g.count; ++k) {
         double& reach = r.reach[g.bones[k]];
         reach = std::max(reach, (p - r.bind_joint[g.bones[k]]).norm() + model.particle_radius);
       }
+    }
+    const Vec3 centre = 0.5 * (lo + hi);
+    double radius = 0;
+    for (int i = g.begin; i < g.end; ++i)
+      radius = std::max(radius, (Vec3(L.bind_xyz[0][i], L.bind_xyz[1][i], L.bind_xyz[2][i]) - centre).norm());
+    r.group_centre.push_back(centre);
+    r.group_radius.push_back(radius * (1 + 1e-12) + 1e-12);  // rounding of B_k p never leaves the ball
+  }
+  // Spans: maximal runs of groups with the same bones; a span's ball holds its groups' balls.
+  for (size_t g = 0; g < L.groups.size(); ++g) {
+    const SkinGroup& a = L.groups[g];
+    const bool same = g > 0 && a.count == L.groups[g - 1].count &&
+                      std::equal(a.bones.begin(), a.bones.begin() + a.count, L.groups[g - 1].bones.begin());
+    if (!same) r.span_first.push_back(g);
+  }
+  r.span_first.push_back(L.groups.size());
+  for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (size_t g = r.span_first[s]; g < r.span_first[s + 1]; ++g) {
+      lo = lo.cwiseMin(r.group_centre[g] - Vec3::Constant(r.group_radius[g]));
+      hi = hi.cwiseMax(r.group_centre[g] + Vec3::Constant(r.group_radius[g]));
+    }
+    const Vec3 centre = 0.5 * (lo + hi);
+    double radius = 0;
+    for (size_t g = r.span_first[s]; g < r.span_first[s + 1]; ++g)
+      radius = std::max(radius, (r.group_centre[g] - centre).norm() + r.group_radius[g]);
+    r.span_centre.push_back(centre);
+    r.span_radius.push_back(radius * (1 + 1e-12) + 1e-12);
+  }
   return r;
+}
+
+void coarse_bounds(const SkinGroup& group, const Vec3& c, double r,
+                   const std::array<BoneTransform, kHandJointCount>& bones, double* box) {
+  for (int d = 0; d < 3; ++d) {
+    box[d] = std::numeric_limits<double>::infinity();
+    box[3 + d] = -std::numeric_limits<double>::infinity();
+  }
+  for (int k = 0; k < group.count; ++k) {
+    const BoneTransform& B = bones[group.bones[k]];
+    const Vec3 x = B.leftCols<3>() * c + B.col(3);
+    for (int d = 0; d < 3; ++d) {
+      box[d] = std::min(box[d], x[d] - r);
+      box[3 + d] = std::max(box[3 + d], x[d] + r);
+    }
+  }
 }
 
 void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,

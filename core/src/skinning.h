@@ -47,12 +47,26 @@ void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJo
 // rigid, so B_k p lies within |p - j_k| of B_k j_k (j_k: bind position of joint k), and a blend of such points
 // lies in the box around those balls. reach[k] = max over particles influenced by bone k of |p - j_k|, plus
 // the particle radius; < 0 for a bone no particle uses.
+// The same per particle group (run of model.particle_skin): each group's bind points lie within
+// group_radius of group_centre, so B_k of them lie within group_radius of B_k group_centre for each of its
+// bones, and their blend in the box around those balls.
 struct HandReach {
   std::array<Vec3, kHandJointCount> bind_joint;
   std::array<double, kHandJointCount> reach;
+  std::vector<Vec3> group_centre;
+  std::vector<double> group_radius;
+  // Consecutive groups with the same bones (the runs of one render group) as one "span" with its own centre
+  // and radius: a far span rules out all its groups with one test. span_first has one more entry than spans.
+  std::vector<size_t> span_first;
+  std::vector<Vec3> span_centre;
+  std::vector<double> span_radius;
 };
 HandReach build_hand_reach(const HandModel& model);
 void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
                             Vec3& lo, Vec3& hi);
+// A box sure to hold the centres of the points within `radius` of `centre` (bind pose) blended from the bones
+// of `group`, from the bones alone (no particle radius): a group's (group_centre) or a span's.
+void coarse_bounds(const SkinGroup& group, const Vec3& centre, double radius,
+                   const std::array<BoneTransform, kHandJointCount>& bones, double* box);
 
 }  // namespace handsim

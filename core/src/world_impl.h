@@ -99,7 +99,8 @@ struct HandSlot {
   HandReach reach;                  // built once from the model
   bool particles_current = true;    // state.tracked_positions belong to the last tracked frame
   bool deformed_current = true;     // state.deformed_positions hold this frame's deformation (else == tracked)
-  std::vector<double> group_bounds; // box of each particle group's centres (6 per group), when current
+  std::vector<double> group_bounds; // box of each particle group's centres (6 per group); empty: not skinned
+  std::vector<Vec3> displaced_centres;  // deformed centre of each of state.displaced (deform_hands)
   // ParticleContacts::BulletObjects: this hand's particles as Bullet objects, rebuilt when bodies change.
   std::unique_ptr<BulletParticleCollider> bullet_particles;
   std::vector<uint32_t> bullet_bodies;  // body slot of each collider body
@@ -188,6 +189,8 @@ struct World::Impl {
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
   // Lazy particles (world_step.cpp): skin now / on read, and the coarse test that decides.
   void skin_particles(HandSlot& h);
+  int skin_particles_in_reach(HandSlot& h);
+  std::vector<double> near_boxes;  // scratch of skin_particles_in_reach
   void refresh_particles(HandSlot& h, bool deformed);
   bool near_any_body(const Vec3& lo, const Vec3& hi) const;
   void skin_render_mesh(HandSlot& h);

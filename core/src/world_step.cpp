@@ -59,7 +59,7 @@ void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames)
 
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
 std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
-  int tracked = 0, skinned = 0;
+  int tracked = 0, skinned = 0, in_reach = 0;
   size_t k = 0;
   for (HandSlot& h : hands) {
     if (!h.alive) continue;
@@ -78,8 +78,11 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     h.deformed_current = false;
     h.particles_current = false;
     coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
-    if (def.paper_pipeline || near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+    if (def.paper_pipeline) {
       skin_particles(h);
+      ++skinned;
+    } else if (near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+      in_reach += skin_particles_in_reach(h);
       ++skinned;
     }
     h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
@@ -90,8 +93,78 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     ++tracked;
   }
   if (tracked == 0) return "skip: no tracked hand";
-  return std::to_string(tracked) + " tracked hand(s), " + std::to_string(skinned) +
-         " near a body (particles skinned), " + std::to_string(tracked - skinned) + " far (particles left unskinned)";
+  return std::to_string(tracked) + " tracked hand(s), " + std::to_string(skinned) + " near a body (" +
+         std::to_string(in_reach) + " particle(s) within reach of a body skinned), " +
+         std::to_string(tracked - skinned) + " far (particles left unskinned)";
+}
+
+// A hand near a body: only the particle groups whose bone-derived box comes within contact reach of a body
+// (its box grown by the particle radius and the release distance, the widest margin detect_contacts uses) are
+// skinned, each with its exact box; the others keep an empty box, so no contact test looks at them, and the
+// particles are skinned in full only if something reads them. Returns the number of particles skinned.
+int World::Impl::skin_particles_in_reach(HandSlot& h) {
+  const HandModel& m = *h.model;
+  const SkinLayout& layout = m.particle_skin;
+  const double reach = m.particle_radius + def.grasp.release_distance;
+  // The bodies near the hand at all: the only ones its groups need testing against.
+  near_boxes.clear();
+  const Vec3 lo_h = h.state.bounds_lo.array() - def.grasp.release_distance;
+  const Vec3 hi_h = h.state.bounds_hi.array() + def.grasp.release_distance;
+  for (size_t i = 0; i < std::min(bodies.size(), body_boxes.size() / 6); ++i) {
+    const double* b = &body_boxes[6 * i];
+    if (bounds_overlap(lo_h, hi_h, Eigen::Map<const Vec3>(b), Eigen::Map<const Vec3>(b + 3)))
+      near_boxes.insert(near_boxes.end(), b, b + 6);
+  }
+  h.state.tracked_positions.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
+  h.group_bounds.resize(6 * layout.groups.size());
+  auto in_reach = [&](const double* box) {
+    for (size_t j = 0; j < near_boxes.size(); j += 6)
+      if (box[0] - reach <= near_boxes[j + 3] && box[1] - reach <= near_boxes[j + 4] &&
+          box[2] - reach <= near_boxes[j + 5] && near_boxes[j] <= box[3] + reach &&
+          near_boxes[j + 1] <= box[4] + reach && near_boxes[j + 2] <= box[5] + reach)
+        return true;
+    return false;
+  };
+  auto grow = [](Vec3& lo, Vec3& hi, const double* box) {
+    lo = lo.cwiseMin(Eigen::Map<const Vec3>(box));
+    hi = hi.cwiseMax(Eigen::Map<const Vec3>(box + 3));
+  };
+  auto empty = [](double* box) {  // no contact prefilter passes an empty box
+    std::fill(box, box + 3, std::numeric_limits<double>::infinity());
+    std::fill(box + 3, box + 6, -std::numeric_limits<double>::infinity());
+  };
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  int count = 0;
+  bool all = true;
+  const HandReach& r = h.reach;
+  for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
+    const size_t first = r.span_first[s], last = r.span_first[s + 1];
+    double span_box[6];
+    coarse_bounds(layout.groups[first], r.span_centre[s], r.span_radius[s], h.state.bones, span_box);
+    if (!in_reach(span_box)) {  // the whole span is out of reach: its box bounds the hand, its groups are empty
+      grow(lo, hi, span_box);
+      for (size_t g = first; g < last; ++g) empty(&h.group_bounds[6 * g]);
+      all = false;
+      continue;
+    }
+    for (size_t g = first; g < last; ++g) {
+      double* box = &h.group_bounds[6 * g];
+      coarse_bounds(layout.groups[g], r.group_centre[g], r.group_radius[g], h.state.bones, box);
+      if (in_reach(box)) {
+        skin_layout(layout, h.state.bones, h.state.tracked_positions.data(), g, g + 1, h.group_bounds.data());
+        count += layout.groups[g].end - layout.groups[g].begin;
+        grow(lo, hi, box);  // now the exact box of its centres
+      } else {
+        grow(lo, hi, box);
+        empty(box);
+        all = false;
+      }
+    }
+  }
+  h.state.bounds_lo = lo.array() - m.particle_radius;
+  h.state.bounds_hi = hi.array() + m.particle_radius;
+  h.particles_current = all;
+  return count;
 }
 
 // Eq. 1 for the particles, with the box of each particle group for the contact prefilter; the hand's bounds
@@ -113,7 +186,9 @@ void World::Impl::skin_particles(HandSlot& h) {
 void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
   if (!h.particles_current) skin_particles(h);
   if (deformed && !h.deformed_current) {
-    h.state.deformed_positions = h.state.tracked_positions;  // no particle was displaced this frame
+    h.state.deformed_positions = h.state.tracked_positions;
+    for (size_t k = 0; k < h.state.displaced.size(); ++k)  // the particles deform_hands pushed back
+      h.state.deformed_positions.col(h.state.displaced[k]) = h.displaced_centres[k];
     h.deformed_current = true;
   }
 }
@@ -125,6 +200,7 @@ bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
 }
 
 void World::Impl::skin_render_mesh(HandSlot& h) {
+  if (!h.state.displaced.empty()) refresh_particles(h, true);  // the deformation reads the displaced particles
   skin_groups(*h.model, h.state.bones, h.render, def.render_threads);
   apply_render_deformation(*h.model, h.state, h.render);  // reads only displaced particles, which are current
   h.render_dirty = false;
@@ -245,7 +321,8 @@ std::string World::Impl::detect_contacts(double dt) {
         std::stable_sort(found.begin(), found.end(),
                          [](const ParticleContact& a, const ParticleContact& b) { return a.particle < b.particle; });
       } else {
-        refresh_particles(h, false);  // a no-op: a hand near a body was skinned in pose_hands
+        // The groups within reach of this body were skinned in pose_hands (skin_particles_in_reach); the
+        // ranges below are those groups only.
         if (def.paper_pipeline) ranges.assign(1, {0, int(h.state.tracked_positions.cols())});
         else near_particle_ranges(h, radius + margin, lo, hi_b, ranges);
         for (const auto& r : ranges) candidates += r.second - r.first;
@@ -324,9 +401,16 @@ std::string World::Impl::deform_hands() {
       h.deformed_current = false;
       continue;
     }
-    refresh_particles(h, false);
-    deform_particles(*h.model, h.state, all);
-    h.deformed_current = true;
+    if (def.paper_pipeline) {
+      refresh_particles(h, false);
+      deform_particles(*h.model, h.state, all);
+      h.deformed_current = true;
+    } else {
+      // Only the touching particles: their deformed centres are kept aside and the full deformed matrix is
+      // made when read (refresh_particles), so 3 touching particles of 10,000 cost 3, not a 10,000 copy.
+      displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres);
+      h.deformed_current = false;
+    }
     deformed += int(h.state.displaced.size());
   }
   if (deformed == 0) return "skip: no particle inside a body";
