@@ -21,23 +21,50 @@ void World::Impl::update_box(uint32_t bi) {
   if (body_boxes.size() < 6 * bodies.size()) body_boxes.resize(6 * bodies.size());
   double* box = &body_boxes[6 * bi];
   const Body& b = bodies[bi];
+  double next[6];
   if (!b.alive) {
     // An empty box: lo > hi on every axis, so no overlap test passes.
-    std::fill(box, box + 3, std::numeric_limits<double>::infinity());
-    std::fill(box + 3, box + 6, -std::numeric_limits<double>::infinity());
-    return;
+    std::fill(next, next + 3, std::numeric_limits<double>::infinity());
+    std::fill(next + 3, next + 6, -std::numeric_limits<double>::infinity());
+  } else {
+    // The prepared shape's local bounds, turned: the same arithmetic as shape_world_bounds without
+    // recomputing the local bounds (a convex hull's walk over its points).
+    const Vec3 llo = b.prepared.local_lo, lhi = b.prepared.local_hi;
+    const Mat3 R = b.pose.orientation.normalized().toRotationMatrix();
+    const Vec3 c = b.pose.transform(0.5 * (llo + lhi));
+    const Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
+    for (int k = 0; k < 3; ++k) {
+      next[k] = c[k] - e[k];
+      next[3 + k] = c[k] + e[k];
+    }
   }
-  // The prepared shape's local bounds, turned: the same arithmetic as shape_world_bounds without recomputing
-  // the local bounds (a convex hull's walk over its points).
-  const Vec3 llo = b.prepared.local_lo, lhi = b.prepared.local_hi;
-  const Mat3 R = b.pose.orientation.normalized().toRotationMatrix();
-  const Vec3 c = b.pose.transform(0.5 * (llo + lhi));
-  const Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
-  const Vec3 lo = c - e, hi = c + e;
-  for (int k = 0; k < 3; ++k) {
-    box[k] = lo[k];
-    box[3 + k] = hi[k];
+  if (!std::equal(next, next + 6, box)) box_order_dirty = true;  // a body at rest keeps the order valid
+  std::copy(next, next + 6, box);
+}
+
+// The sweep-and-prune order of the boxes: slots sorted by their box's lower x, so a query reads only the
+// boxes whose lower x lies within [query lo x - widest box, query hi x]. Re-sorted (insertion sort: the order
+// changes little from frame to frame) only after a box moved.
+void World::Impl::sort_boxes() const {
+  const size_t n = std::min(bodies.size(), body_boxes.size() / 6);
+  for (size_t i = box_order.size(); i < n; ++i) box_order.push_back(uint32_t(i));
+  box_order.erase(std::remove_if(box_order.begin(), box_order.end(), [&](uint32_t i) { return i >= n; }),
+                  box_order.end());
+  auto key = [&](uint32_t i) { return body_boxes[6 * i]; };
+  for (size_t i = 1; i < box_order.size(); ++i) {
+    const uint32_t v = box_order[i];
+    size_t j = i;
+    for (; j > 0 && key(box_order[j - 1]) > key(v); --j) box_order[j] = box_order[j - 1];
+    box_order[j] = v;
   }
+  box_lo_x.resize(box_order.size());
+  widest_box_x = 0;
+  for (size_t i = 0; i < box_order.size(); ++i) {
+    box_lo_x[i] = key(box_order[i]);
+    const double w = body_boxes[6 * box_order[i] + 3] - box_lo_x[i];
+    if (w > widest_box_x) widest_box_x = w;  // empty boxes give -inf
+  }
+  box_order_dirty = false;
 }
 
 // The bodies whose pose the step or the API moves outside Bullet: held bodies (they follow their hand) and
@@ -49,18 +76,31 @@ void World::Impl::refresh_moving_boxes() {
   for (uint32_t k : joint_order) update_box(joints[k].child);
 }
 
-// The broadphase query of a hand: whether its box, grown by `margin`, overlaps any live body's box. A flat
-// scan of 6 doubles per body: 1,000 bodies are ~48 kB read in order, a few microseconds at most.
-bool World::Impl::box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const {
+// The broadphase: the live bodies whose box overlaps [lo, hi] grown by `margin`, in slot order (out), or
+// only whether there is one (out null).
+bool World::Impl::bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const {
+  if (box_order_dirty || box_order.size() != std::min(bodies.size(), body_boxes.size() / 6)) sort_boxes();
+  if (out) out->clear();
   const double qlo[3] = {lo.x() - margin, lo.y() - margin, lo.z() - margin};
   const double qhi[3] = {hi.x() + margin, hi.y() + margin, hi.z() + margin};
-  const size_t n = std::min(bodies.size(), body_boxes.size() / 6);
-  for (size_t i = 0; i < n; ++i) {
-    const double* b = &body_boxes[6 * i];
-    if (b[0] <= qhi[0] && b[1] <= qhi[1] && b[2] <= qhi[2] && qlo[0] <= b[3] && qlo[1] <= b[4] && qlo[2] <= b[5])
-      return true;
+  // Boxes whose lower x is above the query's upper x cannot overlap; nor can those whose lower x is more
+  // than the widest box below the query's lower x.
+  size_t i = size_t(std::upper_bound(box_lo_x.begin(), box_lo_x.end(), qhi[0]) - box_lo_x.begin());
+  bool any = false;
+  while (i-- > 0 && box_lo_x[i] >= qlo[0] - widest_box_x) {
+    const double* b = &body_boxes[6 * box_order[i]];
+    if (b[1] <= qhi[1] && b[2] <= qhi[2] && qlo[0] <= b[3] && qlo[1] <= b[4] && qlo[2] <= b[5]) {
+      if (!out) return true;
+      out->push_back(box_order[i]);
+      any = true;
+    }
   }
-  return false;
+  if (out) std::sort(out->begin(), out->end());
+  return any;
+}
+
+bool World::Impl::box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const {
+  return bodies_near(lo, hi, margin, nullptr);
 }
 
 // The grasped bodies in slot order. Entries are added in begin_grasp and dropped here once their body is

@@ -100,6 +100,8 @@ struct HandSlot {
   bool particles_current = true;    // state.tracked_positions belong to the last tracked frame
   bool deformed_current = true;     // state.deformed_positions hold this frame's deformation (else == tracked)
   std::vector<double> group_bounds; // box of each particle group's centres (6 per group); empty: not skinned
+  std::vector<uint32_t> reach_groups;  // the groups skin_particles_in_reach skinned, ascending
+  bool reach_groups_only = false;      // only reach_groups have boxes (else every group has its exact box)
   std::vector<Vec3> displaced_centres;  // deformed centre of each of state.displaced (deform_hands)
   // ParticleContacts::BulletObjects: this hand's particles as Bullet objects, rebuilt when bodies change.
   std::unique_ptr<BulletParticleCollider> bullet_particles;
@@ -149,6 +151,10 @@ struct World::Impl {
   // empty for a dead slot), in one flat array: the hand-body broadphase scans it instead of the bodies. The
   // lists are what the per-step passes walk instead of every body, so settled and static bodies cost nothing.
   std::vector<double> body_boxes;
+  mutable std::vector<uint32_t> box_order;  // sweep-and-prune order of body_boxes (sort_boxes)
+  mutable std::vector<double> box_lo_x;
+  mutable double widest_box_x = 0;
+  mutable bool box_order_dirty = true;
   std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
   std::vector<uint32_t> released;  // bodies whose just_released is set
   std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
@@ -191,6 +197,7 @@ struct World::Impl {
   void skin_particles(HandSlot& h);
   int skin_particles_in_reach(HandSlot& h);
   std::vector<double> near_boxes;  // scratch of skin_particles_in_reach
+  std::vector<uint32_t> near_bodies;  // scratch of the broadphase queries
   void refresh_particles(HandSlot& h, bool deformed);
   bool near_any_body(const Vec3& lo, const Vec3& hi) const;
   void skin_render_mesh(HandSlot& h);
@@ -227,6 +234,8 @@ struct World::Impl {
   void update_box(uint32_t body);
   void refresh_moving_boxes();
   bool box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const;
+  bool bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const;
+  void sort_boxes() const;
   const std::vector<uint32_t>& held_bodies();
   const std::vector<uint32_t>& dynamic_bodies();
   bool physics_needed(double dt);

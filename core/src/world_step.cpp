@@ -84,6 +84,9 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     } else if (near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
       in_reach += skin_particles_in_reach(h);
       ++skinned;
+    } else {
+      h.reach_groups.clear();  // far from every body: no contact is possible this frame
+      h.reach_groups_only = true;
     }
     h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
     h.has_pose = true;
@@ -99,21 +102,23 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
 }
 
 // A hand near a body: only the particle groups whose bone-derived box comes within contact reach of a body
-// (its box grown by the particle radius and the release distance, the widest margin detect_contacts uses) are
+// (its box grown by the particle radius, and by the release distance for a body the hand holds: the margins
+// detect_contacts uses) are
 // skinned, each with its exact box; the others keep an empty box, so no contact test looks at them, and the
 // particles are skinned in full only if something reads them. Returns the number of particles skinned.
 int World::Impl::skin_particles_in_reach(HandSlot& h) {
   const HandModel& m = *h.model;
   const SkinLayout& layout = m.particle_skin;
-  const double reach = m.particle_radius + def.grasp.release_distance;
+  const double reach = m.particle_radius;
   // The bodies near the hand at all: the only ones its groups need testing against.
+  // Each grown by the margin detect_contacts gives it: the release distance for a body this hand holds, none
+  // for the others (their contacts need real contact).
   near_boxes.clear();
-  const Vec3 lo_h = h.state.bounds_lo.array() - def.grasp.release_distance;
-  const Vec3 hi_h = h.state.bounds_hi.array() + def.grasp.release_distance;
-  for (size_t i = 0; i < std::min(bodies.size(), body_boxes.size() / 6); ++i) {
-    const double* b = &body_boxes[6 * i];
-    if (bounds_overlap(lo_h, hi_h, Eigen::Map<const Vec3>(b), Eigen::Map<const Vec3>(b + 3)))
-      near_boxes.insert(near_boxes.end(), b, b + 6);
+  bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+  const uint32_t hand = uint32_t(&h - hands.data());
+  for (uint32_t bi : near_bodies) {
+    const double margin = bodies[bi].held_by(hand) ? def.grasp.release_distance : 0.0;
+    for (int k = 0; k < 6; ++k) near_boxes.push_back(body_boxes[6 * bi + k] + (k < 3 ? -margin : margin));
   }
   h.state.tracked_positions.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
   h.group_bounds.resize(6 * layout.groups.size());
@@ -137,6 +142,7 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
   int count = 0;
   bool all = true;
   const HandReach& r = h.reach;
+  h.reach_groups.clear();
   for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
     const size_t first = r.span_first[s], last = r.span_first[s + 1];
     double span_box[6];
@@ -152,6 +158,7 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
       coarse_bounds(layout.groups[g], r.group_centre[g], r.group_radius[g], h.state.bones, box);
       if (in_reach(box)) {
         skin_layout(layout, h.state.bones, h.state.tracked_positions.data(), g, g + 1, h.group_bounds.data());
+        h.reach_groups.push_back(uint32_t(g));
         count += layout.groups[g].end - layout.groups[g].begin;
         grow(lo, hi, box);  // now the exact box of its centres
       } else {
@@ -164,6 +171,7 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
   h.state.bounds_lo = lo.array() - m.particle_radius;
   h.state.bounds_hi = hi.array() + m.particle_radius;
   h.particles_current = all;
+  h.reach_groups_only = true;
   return count;
 }
 
@@ -180,6 +188,7 @@ void World::Impl::skin_particles(HandSlot& h) {
   h.state.bounds_lo = lo.array() - m.particle_radius;
   h.state.bounds_hi = hi.array() + m.particle_radius;
   h.particles_current = true;
+  h.reach_groups_only = false;
 }
 
 // Brings the lazily skipped particle positions up to date (same arithmetic as in the step, so same bits).
@@ -293,15 +302,20 @@ std::string World::Impl::detect_contacts(double dt) {
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
     if (!h.alive || !h.state.tracked) continue;
+    // A hand far from every body (pose_hands) has no group within reach and cannot touch anything.
+    if (!bullet && !def.paper_pipeline && h.reach_groups_only && h.reach_groups.empty()) continue;
     const double radius = h.model->particle_radius;
     if (bullet || def.paper_pipeline) refresh_particles(h, false);
     if (bullet) collide_bullet_particles(hi, per_body);
-    const Vec3 reach = Vec3::Constant(def.grasp.release_distance);
-    for (uint32_t bi = 0; bi < bodies.size(); ++bi) {
-      // The broadphase: the flat box array first (the widest margin), the body itself only when near.
+    // The broadphase (the widest margin); the paper pipeline tests every body.
+    if (def.paper_pipeline) {
+      near_bodies.clear();
+      for (uint32_t bi = 0; bi < bodies.size(); ++bi) near_bodies.push_back(bi);
+    } else {
+      bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+    }
+    for (uint32_t bi : near_bodies) {
       const Vec3 lo = Eigen::Map<const Vec3>(&body_boxes[6 * bi]), hi_b = Eigen::Map<const Vec3>(&body_boxes[6 * bi + 3]);
-      if (!def.paper_pipeline && !bounds_overlap(h.state.bounds_lo - reach, h.state.bounds_hi + reach, lo, hi_b))
-        continue;
       Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
@@ -352,13 +366,18 @@ void World::Impl::near_particle_ranges(const HandSlot& h, double reach, const Ve
   // A little slack over the reach, so a centre exactly at the reach is never dropped by rounding.
   const Vec3 grow = Vec3::Constant(reach * (1 + 1e-9) + 1e-12);
   const std::vector<SkinGroup>& groups = h.model->particle_skin.groups;
-  for (size_t g = 0; g < groups.size(); ++g) {
+  auto consider = [&](size_t g) {
     const Vec3 lo = Eigen::Map<const Vec3>(&h.group_bounds[6 * g]) - grow;
     const Vec3 hi = Eigen::Map<const Vec3>(&h.group_bounds[6 * g + 3]) + grow;
-    if (!bounds_overlap(lo, hi, body_lo, body_hi)) continue;
+    if (!bounds_overlap(lo, hi, body_lo, body_hi)) return;
     if (!ranges.empty() && ranges.back().second == groups[g].begin) ranges.back().second = groups[g].end;
     else ranges.push_back({groups[g].begin, groups[g].end});
-  }
+  };
+  // Only the groups skinned within reach of a body can touch one (the others have empty boxes).
+  if (h.reach_groups_only)
+    for (uint32_t g : h.reach_groups) consider(g);
+  else
+    for (size_t g = 0; g < groups.size(); ++g) consider(g);
 }
 
 // The paper's narrow phase: the hand's particles as Bullet sphere objects (radius + release margin) in a
