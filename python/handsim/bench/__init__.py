@@ -34,3 +34,38 @@ def write_doc(root: Path, doc: str, image: str, plot, text: str, result):
     img.parent.mkdir(parents=True, exist_ok=True)
     plot(result, img)
     (Path(root) / "docs" / doc).write_text(text)
+
+
+def _section_bounds(text: str, name: str):
+    start, end = f"<!-- section {name} -->", f"<!-- /section {name} -->"
+    a, b = text.find(start), text.find(end)
+    return (a, b + len(end)) if a >= 0 and b > a else None
+
+
+def replace_section(path, name: str, body: str):
+    """Writes `body` between the markers of section `name` of the markdown file `path` (appended at the end
+    when the file has no such section): how a benchmark puts its table into a report another one generates."""
+    path = Path(path)
+    text = path.read_text() if path.exists() else ""
+    block = f"<!-- section {name} -->\n{body.rstrip()}\n<!-- /section {name} -->"
+    span = _section_bounds(text, name)
+    text = text[:span[0]] + block + text[span[1]:] if span else text.rstrip() + "\n\n" + block + "\n"
+    path.write_text(text)
+
+
+def kept_sections(path, new_text: str) -> str:
+    """new_text with every marked section that the file at `path` has filled kept from the file."""
+    path = Path(path)
+    if not path.exists():
+        return new_text
+    old = path.read_text()
+    i = 0
+    while True:
+        a = old.find("<!-- section ", i)
+        if a < 0:
+            return new_text
+        name = old[a + len("<!-- section "):old.find(" -->", a)]
+        span_old, span_new = _section_bounds(old, name), _section_bounds(new_text, name)
+        if span_old and span_new:
+            new_text = new_text[:span_new[0]] + old[span_old[0]:span_old[1]] + new_text[span_new[1]:]
+        i = span_old[1] if span_old else a + 1

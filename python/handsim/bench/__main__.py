@@ -5,6 +5,7 @@ Each benchmark module in this package defines ``run(quick: bool) -> dict`` (the 
 """
 import argparse
 import importlib
+import inspect
 import json
 import sys
 
@@ -14,6 +15,7 @@ BENCHMARKS = {
     "particles": "handsim.bench.particles",
     "peers": "handsim.bench.peers",
     "step": "handsim.bench.step",
+    "sweeps": "handsim.bench.sweeps",
     "world": "handsim.bench.world",
 }
 
@@ -23,12 +25,29 @@ def main(argv=None):
     parser.add_argument("name", choices=sorted(BENCHMARKS) + ["all"])
     parser.add_argument("--json", action="store_true", help="print one JSON document on stdout")
     parser.add_argument("--quick", action="store_true", help="fewer repetitions; under a minute")
+    parser.add_argument("--ray", nargs="?", const="", default=False, metavar="ADDRESS",
+                        help="benchmarks that sweep (particles, sweeps): run the jobs on Ray, a local Ray "
+                             "without ADDRESS")
+    parser.add_argument("--workers", type=int, default=1, help="local processes (or local Ray CPUs) for --ray")
+    parser.add_argument("--doc", default=None, metavar="PATH",
+                        help="benchmarks with a report of their own (peers, sweeps): write it to PATH")
     args = parser.parse_args(argv)
     names = sorted(BENCHMARKS) if args.name == "all" else [args.name]
     results = {}
     for name in names:
         module = importlib.import_module(BENCHMARKS[name])
-        results[name] = module.run(quick=args.quick)
+        kwargs = {}
+        params = inspect.signature(module.run).parameters
+        if "runner" in params and (args.ray is not False or args.workers > 1):
+            from ..runners import make_runner
+            kwargs["runner"] = make_runner(args.ray, args.workers)
+        if "ray" in params:
+            kwargs["ray"] = args.ray
+        if "workers" in params:
+            kwargs["workers"] = args.workers
+        results[name] = module.run(quick=args.quick, **kwargs)
+        if args.doc and hasattr(module, "write_doc"):
+            module.write_doc(results[name], args.doc)
         if not args.json:
             print(module.table(results[name]))
     if args.json:

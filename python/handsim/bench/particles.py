@@ -152,13 +152,16 @@ def _jewelry_with(sampling, count, radius, seed):
         step_bench._hand = original
 
 
-def run(quick=False, write=None):
+def run(quick=False, write=None, runner=None):
+    """runner (handsim.runners): where the draws of every (sampling, count, seed) run; default this process.
+    The step times of a draw are measured wherever it runs, so spread them over cores only for the errors."""
     load_before = os.getloadavg()[0]
     t_start = time.perf_counter()
     place, radius = press_placement(), default_radius()
     rows, refs = [], {}
     for series in SERIES:
-        series_rows, refs[series] = measure_series(series, radius if series == "fixed" else 0.0, place, quick)
+        series_rows, refs[series] = measure_series(series, radius if series == "fixed" else 0.0, place, quick,
+                                                   runner)
         rows += series_rows
     result = {"rows": rows, "quick": quick, "presses": len(PRESSES), "pinch_frames": PINCH_FRAMES,
               "default_radius_m": radius, "references": refs, "project_default": list(project_default()),
@@ -175,17 +178,29 @@ def run(quick=False, write=None):
     return result
 
 
-def measure_series(series, radius, place, quick):
+def _draw(job):
+    """One draw (a job of a runner): the presses and the pinch of one sampling, count and seed."""
+    sampling, n, place, radius, seed = job
+    sampling = handsim.ParticleSampling.__members__[sampling]
+    return press(n, sampling, place, radius, seed=seed), pinch(n, sampling, radius, seed=seed)
+
+
+def measure_series(series, radius, place, quick, runner=None):
     """Rows of one series (both samplings, then the reference row) and a summary of its reference."""
+    from ..runners import LocalRunner
     samplings = (handsim.ParticleSampling.RANDOM, handsim.ParticleSampling.EVEN)
     ref_press, ref_pinch = press(ALL, samplings[0], place, radius), pinch(ALL, samplings[0], radius)
+    cells = [(sampling, n, SEEDS if sampling == handsim.ParticleSampling.RANDOM and not quick else SEEDS[:1])
+             for sampling in samplings for n in (QUICK_COUNTS if quick else COUNTS)]
+    jobs = [(sampling.name, n, place, radius, k) for sampling, n, seeds in cells for k in seeds]
+    done = iter((runner or LocalRunner(1)).map(_draw, jobs))
     rows = []
-    for sampling in samplings:
-        seeds = SEEDS if sampling == handsim.ParticleSampling.RANDOM and not quick else SEEDS[:1]
-        for n in (QUICK_COUNTS if quick else COUNTS):
-            draws = [_row(series, sampling.name, press(n, sampling, place, radius, seed=k),
-                          pinch(n, sampling, radius, seed=k), ref_press, ref_pinch) for k in seeds]
-            rows.append(mean_row(draws))
+    for sampling, n, seeds in cells:
+        draws = []
+        for _ in seeds:
+            p, g = next(done)
+            draws.append(_row(series, sampling.name, p, g, ref_press, ref_pinch))
+        rows.append(mean_row(draws))
     rows.append(_row(series, "all", ref_press, ref_pinch, ref_press, ref_pinch))
     deeper = press(ALL, samplings[0], place, radius, extra_depth=DEPTH_STEP)
     ref = {"depth_sensitivity": _row(series, "all", deeper, ref_pinch, ref_press, ref_pinch)["fit_linear_rel_error"],

@@ -195,7 +195,9 @@ def run(quick=False, write=None):
         for p in PIPELINES:
             steps.append(measure("render_sweep", p, render=v, frames=sweep_frames, read_frames=sweep_frames))
     threads = render_threads(sweep_frames)
+    from . import scaling
     result = {"steps": steps, "ratios": ratios(steps), "render_threads_read_median_s": threads,
+              "scaling": scaling.run(quick),
               "quick": quick, "frames": frames,
               "sweep_frames": sweep_frames, "machine": f"{platform.machine()} {platform.processor()}".strip(),
               "cpu_count": os.cpu_count(), "load_average": [load_before, _load()],
@@ -253,8 +255,11 @@ def table(result):
     h, rows = _rows(result)
     rh, rr = _ratio_rows(result)
     load = result["load_average"]
+    from . import scaling
     return (f"full step, one thread ({result['frames']} frames per scene, {result['sweep_frames']} per sweep point; "
-            f"load average {load[0]:.2f} -> {load[1]:.2f})\n" + format_table(h, rows) + "\n\n" + format_table(rh, rr))
+            f"load average {load[0]:.2f} -> {load[1]:.2f})\n" + format_table(h, rows) + "\n\n" + format_table(rh, rr)
+            + "\n\nscaling (issue 25)\n" + format_table(*scaling.table_rows(result["scaling"])) + "\n\n"
+            + format_table(*scaling.goal_rows(result["scaling"])))
 
 
 # --- the report (docs/performance.md and docs/img/step_scaling.png) -------------------------------------
@@ -305,7 +310,10 @@ def _verdict(value, target):
 
 
 def write_report(result, root=ROOT):
-    write_doc(root, "performance.md", "step_scaling.png", plot, report(result), result)
+    # Sections other benchmarks write into this file (--doc docs/performance.md) are kept as they are.
+    from . import kept_sections
+    text = kept_sections(Path(root) / "docs" / "performance.md", report(result))
+    write_doc(root, "performance.md", "step_scaling.png", plot, text, result)
 
 
 def report(result):
@@ -439,6 +447,32 @@ def report(result):
       "for a bad joint. After all this, the same profile of scene (a) has no dominant per-step function: apart "
       "from the setup (model building), its samples spread over the Python loop, Bullet's substeps, the hinge "
       "joint and small allocations, each a few percent at most.")
+    w("")
+    sc = result.get("scaling")
+    if sc:
+        from . import scaling
+        w("## Scaling: cost follows what is touched (issue 25)")
+        w("")
+        w("From the same run (`python/handsim/bench/scaling.py`): every world built first, then timed in "
+          f"{sc['rounds']} interleaved rounds of {sc['block']} steps; a figure is the median over rounds of the "
+          "block medians. \"particles in reach\" is how many particles the skinning stage skinned because their "
+          "group's bone-derived box came within contact reach of a body; \"Bullet\" whether the dynamics stage "
+          "ran Bullet or skipped it (no dynamic body awake).")
+        w("")
+        w(markdown_table(*scaling.goal_rows(sc)))
+        w("")
+        w(markdown_table(*scaling.table_rows(sc)))
+        w("")
+        w("- hover: a still hand 2 cm over a static box, nothing touching; far_hand: one hand 3 m from N settled "
+          "5 cm boxes; no_hand: N settled or static boxes and no hand; hands: 1-4 hands, each over its own box.")
+        w("- A settled world costs the step's bookkeeping only: Bullet is not stepped when no dynamic body is "
+          "awake, nothing was written to it and no moving kinematic body is near a dynamic one.")
+        w("")
+    w("<!-- section peers -->")
+    w("<!-- /section peers -->")
+    w("")
+    w("<!-- section sweeps -->")
+    w("<!-- /section sweeps -->")
     w("")
     w("## The particle count")
     w("")

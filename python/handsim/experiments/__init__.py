@@ -219,26 +219,27 @@ def _cell_job(args):
     return run_condition(method, threshold, trials, (cell,), full_paper=full_paper)
 
 
-def _run_jobs(jobs, workers: int):
-    if workers > 1 and len(jobs) > 1:
-        import multiprocessing as mp
-        with mp.get_context("fork").Pool(min(workers, len(jobs))) as pool:
-            parts = pool.map(_cell_job, jobs, chunksize=1)
-    else:
-        parts = [_cell_job(j) for j in jobs]
+def _run_jobs(jobs, workers: int = 1, runner=None):
+    """Every job's trials, in job order, on `runner` (handsim.runners; default: local, `workers` processes).
+    A job is one (method, threshold, cell): the same jobs in the same order on every runner."""
+    from ..runners import LocalRunner
+    runner = runner or LocalRunner(workers)
+    parts = runner.map(_cell_job, jobs)
     return [r for part in parts for r in part]
 
 
-def run_all(trials: int, methods=METHODS, thresholds=THRESHOLDS, cells=CELLS, workers: int = 1):
-    """All conditions; with workers > 1 the (condition, task) cells run in parallel processes (same results)."""
-    return _run_jobs([(m, c, trials, cell, False) for m in methods for c in thresholds for cell in cells], workers)
+def run_all(trials: int, methods=METHODS, thresholds=THRESHOLDS, cells=CELLS, workers: int = 1, runner=None):
+    """All conditions; with workers > 1 (or a runner, e.g. handsim.runners.RayRunner) the (condition, task)
+    cells run in parallel (same results)."""
+    return _run_jobs([(m, c, trials, cell, False) for m in methods for c in thresholds for cell in cells],
+                     workers, runner)
 
 
-def paper_cross_check(results: List[TrialResult], trials: int, workers: int = 1) -> dict:
+def paper_cross_check(results: List[TrialResult], trials: int, workers: int = 1, runner=None) -> dict:
     """Replays the first `trials` users of every paper-method cell with the paper's full pipeline and compares
     each with the same user's trial in `results`: how many ended the same (success, grasp count, drop), and
     the largest difference of the final lid angle (rad)."""
-    full = _run_jobs([("paper", c, trials, cell, True) for c in THRESHOLDS for cell in CELLS], workers)
+    full = _run_jobs([("paper", c, trials, cell, True) for c in THRESHOLDS for cell in CELLS], workers, runner)
     lean = {(r.threshold, r.task, r.hands, r.seed): r for r in results if r.method == "paper"}
     same, compared, angle = 0, 0, 0.0
     for f in full:
