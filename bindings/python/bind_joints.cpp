@@ -193,6 +193,12 @@ void bind_state(py::module_& m) {
       .def_readonly("rate", &JointState::rate, "d value / dt")
       .def_property_readonly("rotation", [](const JointState& s) { return read_only(from_quat(s.rotation)); },
                              "ball: (4,) x, y, z, w, parent frame")
+      .def_property_readonly("anchor", [](const JointState& s) { return from_vec3(s.anchor); },
+                             "(3,) world: hinge/ball pivot, slider anchor, fixed: the held child origin")
+      .def_property_readonly("axis", [](const JointState& s) { return from_vec3(s.axis); },
+                             "(3,) world, unit: hinge/slider axis, ball cone axis; fixed: zeros")
+      .def_readonly("lower", &JointState::lower, "limit: rad (hinge), m (slider), 0 (ball); -inf: none")
+      .def_readonly("upper", &JointState::upper, "limit: rad (hinge; ball: cone half angle), m (slider); inf: none")
       .def_readonly("violation", &JointState::violation, "metres the joint is pulled apart")
       .def_readonly("overshoot", &JointState::overshoot, "rad (hinge) or m (slider) beyond a limit")
       .def_readonly("solved", &JointState::solved, "whether the micro-simulator ran in the last step")

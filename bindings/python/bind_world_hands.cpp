@@ -129,6 +129,26 @@ void bind_world_methods(py::module_& m) {
              return w.body_contact_count(cast_arg<BodyId>(body, "body"), to_hand_id(hand));
            },
            py::arg("body"), py::arg("hand"), "Particles of the hand touching the body in the last step.")
+      .def("body_contacts",
+           [](const World& w, py::handle body, py::handle hand) {
+             const auto& contacts = w.body_contacts(cast_arg<BodyId>(body, "body"), to_hand_id(hand));
+             const py::ssize_t n = py::ssize_t(contacts.size());
+             py::array_t<int> particles(n);
+             py::array_t<double> points({n, py::ssize_t(3)}), normals({n, py::ssize_t(3)}), depths(n);
+             for (py::ssize_t i = 0; i < n; ++i) {
+               const ParticleContact& c = contacts[size_t(i)];
+               particles.mutable_at(i) = c.particle;
+               depths.mutable_at(i) = c.depth;
+               for (py::ssize_t k = 0; k < 3; ++k) {
+                 points.mutable_at(i, k) = c.point[k];
+                 normals.mutable_at(i, k) = c.normal[k];
+               }
+             }
+             return py::make_tuple(particles, points, normals, depths);
+           },
+           py::arg("body"), py::arg("hand"),
+           "The hand's particles touching the body in the last step: (particles (K,), points (K, 3) on the\n"
+           "surface, outward normals (K, 3), depths (K,) in m), sorted by particle.")
       .def("events", &World::events, "Events of the last step (a list; pulled, no callbacks).")
       .def("stage_reports", &World::stage_reports, "One StageReport per stage of the last step, in order.")
       .def("stage_summary", &World::stage_summary, "Readable: which stages ran, what they cost, why.");

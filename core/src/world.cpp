@@ -200,6 +200,14 @@ int World::body_contact_count(BodyId body, HandId hand) const {
   return it == impl_->pairs.end() ? 0 : int(it->second.contacts.size());
 }
 
+const std::vector<ParticleContact>& World::body_contacts(BodyId body, HandId hand) const {
+  static const std::vector<ParticleContact> kNone;
+  impl_->body(body);
+  impl_->hand(hand);
+  auto it = impl_->pairs.find({hand.index, body.index});
+  return it == impl_->pairs.end() ? kNone : it->second.contacts;
+}
+
 const std::vector<Event>& World::events() const { return impl_->events; }
 const std::vector<StageReport>& World::stage_reports() const { return impl_->reports; }
 

@@ -482,18 +482,30 @@ JointState World::joint_state(JointId id) const {
   const Pose p = w.parent_pose(j), c = w.bodies[j.child].pose;
   switch (j.type) {
     case JointType::Hinge: {
+      s.anchor = p.transform(j.hinge.pivot_parent);
+      s.axis = p.orientation * j.hinge.axis_parent;
+      s.lower = j.hinge.lower;
+      s.upper = j.hinge.upper;
       s.violation = hinge_violation(j.hinge, p, c, j.length);
       const double theta = hinge_angle(j.hinge, p, c, j.value);
       s.overshoot = std::max({0.0, j.hinge.lower - theta, theta - j.hinge.upper});
       break;
     }
     case JointType::Slider: {
+      s.anchor = p.transform(j.slider.anchor_parent);
+      s.axis = p.orientation * j.slider.axis;
+      s.lower = j.slider.lower;
+      s.upper = j.slider.upper;
       s.violation = slider_violation(j.slider, p, c, j.length);
       const double d = slider_displacement(j.slider, p, c);
       s.overshoot = std::max({0.0, j.slider.lower - d, d - j.slider.upper});
       break;
     }
     case JointType::Ball: {
+      s.anchor = p.transform(j.ball.pivot_parent);
+      s.axis = p.orientation * j.ball.cone_axis;
+      s.lower = 0;
+      s.upper = j.ball.cone_half_angle;
       s.violation = ball_violation(j.ball, p, c);
       if (j.ball.cone_half_angle < M_PI) {
         const Vec3 axis = j.ball.cone_axis, swung = ball_rotation(j.ball, p, c) * axis;
@@ -503,6 +515,8 @@ JointState World::joint_state(JointId id) const {
       break;
     }
     case JointType::Fixed:
+      s.anchor = (p * j.fixed.relative).position;
+      s.lower = s.upper = 0;
       s.violation = fixed_violation(j.fixed, p, c, j.length);
       break;
   }

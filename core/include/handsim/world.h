@@ -89,6 +89,13 @@ struct JointState {
   double value = 0;  // hinge: theta (rad); slider: s (m); ball, fixed: 0
   double rate = 0;   // d value / dt
   Quat rotation = Quat::Identity();  // ball: R (parent frame, identity at rest)
+  // Where the joint is, world frame, from the parent's pose: the hinge/ball pivot or the slider anchor (fixed:
+  // the child's origin as the parent holds it), the hinge/slider axis or the ball's cone axis (fixed: zero),
+  // and the limits (rad: hinge, and the ball cone's half angle as `upper`; m: slider; +-inf: none). A viewer
+  // draws joints from these; nothing in a step reads them.
+  Vec3 anchor = Vec3::Zero();
+  Vec3 axis = Vec3::Zero();
+  double lower = -kUnlimited, upper = kUnlimited;
   // Metres, measured from the two bodies' poses: how far the joint is pulled apart. Hard joints: rounding
   // only; soft joints: the rubber band.
   double violation = 0;
@@ -174,6 +181,9 @@ class World {
   // --- grasps, contacts, events ---
   GraspInfo body_grasp(BodyId id) const;
   int body_contact_count(BodyId body, HandId hand) const;  // touching particles in the last step
+  // Those contacts themselves (particle, surface point, normal, depth), sorted by particle: what a viewer
+  // colours and what a debugger inspects, without re-deriving the narrow phase outside the core.
+  const std::vector<ParticleContact>& body_contacts(BodyId body, HandId hand) const;
   const std::vector<Event>& events() const;
 
   // --- stepping ---
