@@ -1,18 +1,17 @@
-"""Headless wireframe pictures of a World (matplotlib, Agg): the demo's and the replay's drawings.
+"""Key-frame pictures of a World for the replay and input reports: shaded 3D renders of the viewer's scene
+description (:mod:`handsim.view.raster`), drawn into matplotlib axes.
 
-:func:`snapshot` takes what a picture needs from a world (box corners of the chosen bodies, hand particles);
-:func:`draw` draws a snapshot in a 2-D view (``axes=(2, 1)``: side view from the left, world Z to the right
-and Y up; ``(0, 1)``: front view, X to the right and Y up).
+:func:`snapshot` takes what a picture needs from a world (a :class:`handsim.view.scene.Frame`, float32);
+:func:`draw` renders it around `centre`, `half_width` m to each side, seen from the side named by `axes`
+(``(2, 1)``: from the left, world Z to the right and Y up, a little from above and in front; ``(0, 1)``: from
+the front, X to the right and Y up, a little from above and the right).
 """
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence
+import math
+from typing import Dict, Sequence
 
 import numpy as np
-
-EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
-HAND_COLOURS = ("tab:blue", "tab:red")
-BOX_COLOURS = ("saddlebrown", "darkgoldenrod", "tab:green", "tab:purple")
 
 
 def pyplot():
@@ -22,44 +21,37 @@ def pyplot():
     return plt
 
 
-def rotate(q, v):
-    """v (3,) rotated by the unit quaternion q (x, y, z, w)."""
-    q = np.asarray(q, float)
-    u, w = q[:3], q[3]
-    t = 2 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
-
-
-def box_corners(pose, half):
-    """(8, 3) corners of a box of half extents `half` at `pose` (7,)."""
-    pose = np.asarray(pose, float)
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
-    return np.array([pose[:3] + rotate(pose[3:], s * np.asarray(half, float)) for s in signs])
-
-
 def snapshot(world, bodies: Dict[str, object], title: str = "") -> dict:
-    """Corners of the named box bodies and the deformed particles of every tracked hand (None if untracked)."""
-    boxes = []
-    for name, body in bodies.items():
-        shape = world.body_shape(body)
-        boxes.append((name, box_corners(world.body_pose(body), shape.half_extents)))
-    hands = [np.asarray(world.hand_particles(h, True)) if world.hand_tracked(h) else None for h in world.hands()]
-    return {"boxes": boxes, "hands": hands, "title": title}
+    """The scene description of `world` now (bodies named as in `bodies`; touching particles shown)."""
+    from .view.scene import Describer
+    frame = Describer(world, bodies).frame()
+    for m in frame.meshes:
+        m.vertices = np.asarray(m.vertices, np.float32)
+    return {"frame": frame, "title": title}
 
 
-def draw(ax, snap: dict, centre: Sequence[float], half_width: float = 0.3, axes=(2, 1), aspect: float = 0.67):
-    """Draws `snap` into `ax` around `centre` (3,), `half_width` m to each side."""
-    a, b = axes
-    for k, (_, corners) in enumerate(snap["boxes"]):
-        for i, j in EDGES:
-            ax.plot([corners[i, a], corners[j, a]], [corners[i, b], corners[j, b]],
-                    color=BOX_COLOURS[k % len(BOX_COLOURS)], lw=1.1)
-    for pts, colour in zip(snap["hands"], HAND_COLOURS):
-        if pts is not None:
-            ax.scatter(pts[:, a], pts[:, b], s=0.6, color=colour, alpha=0.5, linewidths=0)
-    ax.set_xlim(centre[a] - half_width, centre[a] + half_width)
-    ax.set_ylim(centre[b] - aspect * half_width, centre[b] + aspect * half_width)
-    ax.set_aspect("equal")
+# view direction (from the target towards the eye) for each pair of picture axes
+_VIEWS = {(2, 1): (-1.0, 0.35, 0.45), (0, 1): (0.35, 0.35, 1.0)}
+
+
+def camera(centre: Sequence[float], half_width: float, axes=(2, 1), width: int = 400, height: int = 300):
+    from .view.raster import Camera
+    if tuple(axes) not in _VIEWS:
+        raise ValueError(f"axes: expected one of {sorted(_VIEWS)}, got {axes!r}")
+    d = np.asarray(_VIEWS[tuple(axes)], float)
+    d /= np.linalg.norm(d)
+    fov = 35.0
+    hfov = 2 * math.atan(math.tan(math.radians(fov) / 2) * width / height)
+    dist = half_width / math.tan(hfov / 2)
+    c = np.asarray(centre, float)
+    return Camera(c + d * dist, c, fov_deg=fov, width=width, height=height)
+
+
+def draw(ax, snap: dict, centre: Sequence[float], half_width: float = 0.3, axes=(2, 1), aspect: float = 0.75):
+    """Renders `snap` into `ax` around `centre` (3,)."""
+    from .view.raster import render
+    cam = camera(centre, half_width, axes, 400, int(round(400 * aspect)))
+    ax.imshow(render(snap["frame"], cam, labels=False))
     ax.set_xticks([])
     ax.set_yticks([])
     if snap.get("title"):

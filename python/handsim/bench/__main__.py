@@ -16,6 +16,7 @@ BENCHMARKS = {
     "peers": "handsim.bench.peers",
     "step": "handsim.bench.step",
     "sweeps": "handsim.bench.sweeps",
+    "view": "handsim.bench.view",
     "world": "handsim.bench.world",
 }
 
