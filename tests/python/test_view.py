@@ -98,7 +98,9 @@ def test_grasped_body_is_highlighted_and_events_are_labelled():
             grasped_frame = f
     assert grasped_frame is not None, "the pinch should grasp the lid"
     lid = next(m for m in grasped_frame.meshes if m.name == "lid")
-    assert lid.color == scene.GRASPED and grasped_frame.grasped == {"lid": "right"}
+    assert lid.color != scene.BODY_COLOURS["lid"] and grasped_frame.grasped == {"lid": "right"}
+    outline = next(ln for ln in grasped_frame.lines if ln.name == "lid/edges")
+    assert outline.color == scene.GRASPED
     assert any("right grasps lid" in lab.text for lab in grasped_frame.labels)
 
 

@@ -15,11 +15,12 @@ from typing import Dict
 
 import numpy as np
 
-from .scene import BODY_COLOURS, GRASPED, SKIN_BY_SIDE, Frame
+from .scene import BODY_COLOURS, SKIN_BY_SIDE, Frame
 
 CLASSES = {"hand": [SKIN_BY_SIDE["RIGHT"], SKIN_BY_SIDE["LEFT"]],
-           "box": [BODY_COLOURS["base"], BODY_COLOURS["lid"], GRASPED]}
-# Hue (degrees) tells the classes apart however a surface is lit: skin ~20, gold ~50, teal ~180. A renderer's
+           "box": [BODY_COLOURS["base"], BODY_COLOURS["lid"]]}
+# Hue (degrees) tells the classes apart however a surface is lit: skin ~20, teal ~180 (a held body is drawn
+# lighter, which keeps its hue). A renderer's
 # lights tint it by some degrees (viser's environment moves the teal ~13 degrees towards blue), far less than
 # the gaps; grey (table, background, controls) has no hue to speak of and is left out by its saturation.
 HUE_TOLERANCE_DEG = 14.0

@@ -23,22 +23,23 @@ from . import raster
 from .scene import Describer, Frame
 
 STRIP_SIZE = (480, 360)
-GIF_SIZE = (480, 360)
+GIF_SIZE = (400, 300)
 
 
 def overview_camera(box, world, width, height) -> raster.Camera:
-    """The user's view of the jewelry box: from in front (+Z, where the user stands), to the right and above,
-    the box and both hands in the picture."""
-    front = np.asarray(box.lid_front(world), float)
-    target = front + [0.0, 0.06, -0.06]
-    return raster.Camera(target + [0.30, 0.26, 0.42], target, fov_deg=40, width=width, height=height)
+    """The user's view of the jewelry box: from in front (+Z, where the user stands), to the left and above,
+    so that the left hand holding the base's left side and the right hand at the lid's front lip are both in
+    sight; aimed at a fixed point above the base, so the picture does not move when the lid does."""
+    base = np.asarray(world.body_pose(box.base), float)[:3]
+    target = base + [0.0, 0.08, 0.0]
+    return raster.Camera(target + [-0.25, 0.24, 0.38], target, fov_deg=38, width=width, height=height)
 
 
 def lip_camera(box, world, width, height) -> raster.Camera:
-    """Close to the lid's front lip, from the right and a little below the lid, so that the thumb under the
-    lip and the finger on top of it are both in sight."""
+    """Close to the lid's front lip, from in front, a little to the right and just below the lid, looking
+    up under the lip: the right thumb's pad under it and the fingers on top are both in sight."""
     front = np.asarray(box.lid_front(world), float)
-    return raster.Camera(front + [0.16, 0.03, 0.14], front + [0.0, 0.0, 0.01], fov_deg=35, width=width,
+    return raster.Camera(front + [0.10, -0.02, 0.21], front + [0.0, -0.004, 0.0], fov_deg=45, width=width,
                          height=height)
 
 
@@ -49,7 +50,7 @@ def _slim(frame: Frame) -> Frame:
     return frame
 
 
-def demo(out_dir: Path, gif_every: int = 4) -> int:
+def demo(out_dir: Path, gif_every: int = 6) -> int:
     """Runs the demo session and writes its pictures into `out_dir`. Returns 0 when both tasks succeed."""
     from .. import demo as _demo
     from ..plots import save_figure
@@ -58,10 +59,10 @@ def demo(out_dir: Path, gif_every: int = 4) -> int:
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    kept: List[tuple] = []           # (state fields, Frame, overview camera, lip camera)
-    lip_frames: List[tuple] = []
+    kept: List[tuple] = []           # (what the caption says, Frame, overview camera)
+    lip_frames: List[tuple] = []     # (caption, Frame, close-up camera) while the right hand holds the lid
     record = {"t": [], "angle": [], "violation": []}
-    state = {"describer": None, "n": 0, "step_s": 0.0, "grasp_t": None}
+    state = {"describer": None, "n": 0, "step_s": 0.0}
 
     def on_step(s):
         world = s.bench.world
@@ -74,24 +75,25 @@ def demo(out_dir: Path, gif_every: int = 4) -> int:
         record["t"].append(s.t)
         record["angle"].append(s.lid_deg)
         record["violation"].append(s.violation)
-        lid_held = world.body_grasp(s.box.lid).grasped
-        first_grasp = lid_held and state["grasp_t"] is None and s.task == "open"
-        if first_grasp:
-            state["grasp_t"] = s.t
-        if state["n"] % gif_every == 0 or first_grasp:
+        g = world.body_grasp(s.box.lid)
+        right_holds_lid = g.grasped and g.primary == s.bench.right
+        # the moment the right hand's grasp of the lid begins, and every few degrees of the swing after it
+        lip_moment = s.task == "open" and right_holds_lid and (not lip_frames or s.lid_deg - lip_frames[-1][0]["lid"] >= 8)
+        if state["n"] % gif_every == 0 or lip_moment:
             f = _slim(d.frame())
-            ov = overview_camera(s.box, world, *GIF_SIZE)
-            kept.append(({"t": s.t, "task": s.task, "lid": s.lid_deg, "held": lid_held}, f, ov))
-            if s.task == "open" and lid_held and (first_grasp or len(lip_frames) < 40):
-                lip_frames.append(({"t": s.t, "lid": s.lid_deg}, f, lip_camera(s.box, world, 640, 480)))
+            info = {"t": s.t, "task": s.task, "lid": s.lid_deg, "held": right_holds_lid}
+            if state["n"] % gif_every == 0:
+                kept.append((info, f, overview_camera(s.box, world, *GIF_SIZE)))
+            if lip_moment:
+                lip_frames.append((info, f, lip_camera(s.box, world, 640, 480)))
 
     t0 = time.perf_counter()
     results = _demo.run(on_step)
     sim_s = time.perf_counter() - t0
 
     def caption(info):
-        what = "holding the lid" if info["held"] else ("opening" if info["task"] == "open" else "closing")
-        return f"{info['task']}  t = {info['t']:.2f} s  lid {info['lid']:.0f}°  ({what})"
+        what = "right hand holds the lid" if info["held"] else ("opening" if info["task"] == "open" else "closing")
+        return f"{info['task']}  t = {info['t']:.2f} s  lid {info['lid']:.0f}°: {what}"
 
     t1 = time.perf_counter()
     # filmstrip: eight moments spread over the session
@@ -102,14 +104,15 @@ def demo(out_dir: Path, gif_every: int = 4) -> int:
     strip_path = raster.save_png(strip, out_dir / "filmstrip.png")
 
     # GIF of the whole session at 60 / gif_every frames per second of simulated time, played at real speed
-    images = [Image.fromarray(raster.render(f, cam, supersample=1, title=caption(info)))
+    images = [Image.fromarray(raster.render(f, cam, supersample=1, title=caption(info), labels=False))
               for info, f, cam in kept]
     gif_path = out_dir / "demo.gif"
     images[0].save(gif_path, save_all=True, append_images=images[1:], duration=int(1000 * gif_every / 60), loop=0)
 
     # close-ups of the lip: the grasp as it begins, and mid-swing
-    shots = [lip_frames[0], lip_frames[min(len(lip_frames) - 1, 20)]] if lip_frames else []
-    close = [raster.render(f, cam, title=f"t = {info['t']:.2f} s, lid {info['lid']:.0f}°: thumb under the lip")
+    shots = [lip_frames[0], lip_frames[min(len(lip_frames) - 1, 4)]] if lip_frames else []
+    close = [raster.render(f, cam, labels=False,
+                           title=f"t = {info['t']:.2f} s, lid {info['lid']:.0f}°: thumb under the lip, fingers on top")
              for info, f, cam in shots]
     close_path = raster.save_png(np.concatenate(close, 1), out_dir / "closeup_lip.png") if close else None
     render_s = time.perf_counter() - t1
@@ -160,8 +163,8 @@ def docs(doc_dir: Path) -> List[Path]:
     lo, hi = skin.bounds()
     tiles = []
     for f, direction, title in ((skin, (0.2, 0.9, 0.5), "skinned render mesh (39,099 vertices)"),
-                                (parts, (0.2, 0.9, 0.5), "1,182 particles by part: palm thumb index middle ring little"),
-                                (parts, (0.3, -0.9, 0.4), "the same, from the palm side")):
+                                (parts, (0.2, 0.9, 0.5), "1,182 particles: grey palm, red thumb, orange index,"),
+                                (parts, (0.3, -0.9, 0.4), "green middle, blue ring, purple little (palm side)")):
         cam = raster.look_at_bounds(lo, hi, direction=direction, fov_deg=30, width=560, height=460, margin=1.0)
         tiles.append(raster.render(f, cam, title=title, shadows=False))
     written.append(raster.save_png(np.concatenate(tiles, 1), img_dir / "view_hand.png"))

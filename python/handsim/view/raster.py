@@ -250,6 +250,7 @@ def _shadow(frame: Frame, cam: Camera, zbuf: np.ndarray) -> np.ndarray:
             over = (v[:, 0] >= lo[0]) & (v[:, 0] <= hi[0]) & (v[:, 2] >= lo[2]) & (v[:, 2] <= hi[2]) & \
                    (v[:, 1] >= hi[1] - 1e-3)
             ground = np.where(over & ~(ground > hi[1]), hi[1], ground)
+        ground[ground > cam.position[1] - 0.01] = np.nan  # a top seen from below shows no shadow
         height = v[:, 1] - ground
         drop = v.copy()
         drop[:, 1] = ground + 2e-4

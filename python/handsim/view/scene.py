@@ -9,8 +9,8 @@ and leaves the state hash alone, which ``tests/python/test_view.py`` checks) and
 * the hand's particles (deformed, i.e. where they are drawn): the touching ones in red ("contact"), all of them
   with the touching ones red ("all"), or all coloured by hand part: thumb, index, middle, ring, little, palm
   ("part");
-* bodies with their shapes (box, sphere, capsule, convex hull, triangle mesh), a body that a hand holds tinted
-  gold and labelled with who holds it;
+* bodies with their shapes (box, sphere, capsule, convex hull, triangle mesh), a body that a hand holds lighter
+  and (a box) outlined in gold, labelled with who holds it;
 * joints: the axis through the anchor, and a hinge's limits as an arc with a tick at the current angle;
 * events of the last second as labels at the body they name.
 """
@@ -274,16 +274,19 @@ class Describer:
             holders = [self._hand_side(h) for h in (g.primary, g.secondary) if h is not None] if g.grasped else []
             if holders:
                 grasped[name] = "+".join(holders)
-            colour = GRASPED if holders else BODY_COLOURS.get(name, OTHER_BODY)
-            if name not in BODY_COLOURS and not holders and w.body_motion(body) == _core.BodyMotion.STATIC:
+            colour = BODY_COLOURS.get(name, OTHER_BODY)
+            if name not in BODY_COLOURS and w.body_motion(body) == _core.BodyMotion.STATIC:
                 colour = BODY_COLOURS["table"]  # an unnamed static body is furniture: grey, like the table
+            if holders:  # lighter, in a thick gold outline: highlighted, and still recognisably itself
+                colour = tuple(0.7 * np.asarray(colour) + 0.3)
             local, tris, edges = self._shape(body)
             pose = w.body_pose(body)
             verts = transform(pose, local)
             closed = w.body_shape(body).type != _core.ShapeType.TRIANGLE_MESH
             meshes.append(Mesh(name, verts, tris, colour, smooth=edges is None, kind="body", closed=closed))
             if edges is not None:
-                lines.append(Lines(f"{name}/edges", verts[edges], EDGE_COLOUR, 1.5))
+                lines.append(Lines(f"{name}/edges", verts[edges], GRASPED if holders else EDGE_COLOUR,
+                                   4.0 if holders else 1.5))
             if holders:
                 labels.append(Label(f"{name}/grasp", verts.max(0) * [0, 1, 0] + verts.mean(0) * [1, 0, 1]
                                     + [0, 0.02, 0], f"{name}: held by {' + '.join(holders)}"))
