@@ -37,8 +37,8 @@ Checks (per recording, per hand):
   every grip of the hand uses), each moved clear and judged
   from that frame on. Rates: *false grasps* (placements where a grasp begins while the grasping hand is
   open), *misses* (closures within reach of the object that the hand never grasps it in; each hand's first
-  closure after the placement only, since the object stands where it was placed only until a hand first
-  acts on it) and *held open*
+  closure that begins at or after the placement frame only: a hand closed before cannot be closing on the
+  object, and the object stands where it was placed only until a hand first acts on it) and *held open*
   (placements held through more than 0.2 s of open hand). *Within reach*: in a closed frame of the closure,
   the hand's particles lie over two opposite faces of the object as placed (their centres within the faces'
   outline), closer together than the object's size less 2 mm: the object cannot fit between them wherever it
@@ -613,9 +613,9 @@ def judge_sweep(track: Track, particles: Particles, settings, hand_defs, placeme
         held, _ = held_open_s(track, trace)
         reach, missed = 0, 0
         for side in HANDS:
-            # the first closure of each hand after the placement only: the object stands where it was placed
-            # only until a hand first acts on it
-            c = next((c for c in cl[side] if c.end > p.frame), None)
+            # each hand's first closure that begins once the object is there: a hand closed before cannot be
+            # closing on it, and the object stands where it was placed only until a hand first acts on it
+            c = next((c for c in cl[side] if c.begin >= p.frame), None)
             if c is not None and reachable(track, particles, p, c):
                 reach += 1
                 missed += not grasped_in(trace, c)
