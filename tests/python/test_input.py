@@ -429,6 +429,25 @@ def test_a_formatversion_2_recording_gives_its_metacarpals(leap_recordings):
     assert doc.format_version == 2 and "middle_metacarpal" not in doc.frames[0]["right"].synthesized
 
 
+@pytest.mark.parametrize("name", sorted(README_COUNTS))
+def test_skeleton_strengths_agree_with_leaps_labels_frame_by_frame(name, leap_recordings):
+    """Issue 20: the skeleton's max(grab, pinch) (skeleton.closure_strengths, for trackers without strengths)
+    labels >= 95 % of the frames Leap calls closed (>= 0.9) or open (< 0.3) the same (the judge's labels,
+    handsim.intent.labels), in every development recording, not only which hand closes. Not independent:
+    GRAB_FLEXION and PINCH_GAP_M were set between the ranges of these recordings' open and closed hands."""
+    from handsim import intent
+    rec = dev_recording(leap_recordings, name)
+    leap_s, skel_s = [], []
+    for i, frame in enumerate(rec.frames):
+        for col, side in enumerate(("right", "left")):
+            if side in frame:
+                leap_s.append(np.nanmax([rec.grab[i, col], rec.pinch[i, col]]))
+                skel_s.append(np.nanmax(skeleton.closure_strengths(frame[side].frame)))
+    (lc, lo), (sc, so) = intent.labels(np.array(leap_s)), intent.labels(np.array(skel_s))
+    agree = np.count_nonzero((lc & sc) | (lo & so)) / np.count_nonzero(lc | lo)
+    assert agree >= 0.95, (name, round(agree, 3))
+
+
 def test_a_grab_closes_the_fingers_as_leaps_grab_strength_says(leap_recordings):
     grab = dev_recording(leap_recordings, "grab")
     flex = np.array([flexion_deg(f["right"].frame)[handsim.INDEX_INTERMEDIATE] for f in grab.frames])
