@@ -406,6 +406,7 @@ class Trace:
     held: np.ndarray
     lid_deg: Optional[np.ndarray]
     snapshot: Optional[dict] = None
+    snapshot_centre: Optional[np.ndarray] = None
 
 
 def _dt(track: Track, i: int) -> float:
@@ -444,7 +445,7 @@ def run(track: Track, placement: Placement, settings, hand_defs, start: Optional
     frames = np.arange(first, len(track.times))
     held = np.zeros((len(frames), 2), bool)
     lid = np.zeros(len(frames)) if hinge is not None else None
-    begins, snap = [], None
+    begins, snap, snap_centre = [], None, None
     for s, i in enumerate(frames):
         given = [track.frames[i].get(side) or _sk.untracked(HANDEDNESS[side]) for side in HANDS]
         world.step(_dt(track, i), given)
@@ -462,7 +463,9 @@ def run(track: Track, placement: Placement, settings, hand_defs, start: Optional
         if snap_at is not None and i == snap_at:
             from . import render
             snap = render.snapshot(world, bodies, f"{track.name} t={track.times[i]:.2f} s")
-    return Trace(frames, begins, held, lid, snap)
+            # the view's centre: the object where it is then (the jewelry box: its lid)
+            snap_centre = np.asarray(world.body_pose(list(bodies.values())[-1]), float)[:3]
+    return Trace(frames, begins, held, lid, snap, snap_centre)
 
 
 # --- judging a trace -------------------------------------------------------------------------------------
@@ -937,10 +940,9 @@ def picture(path: Path, kind: str, track: Track, side: str, settings, rule: str)
     ax.set_ylim(-0.05, 1.05)
     ax.set_xlabel("time (s)")
     ax.legend(fontsize=7, loc="upper left")
-    ax.set_title(f"{track.name} {side} hand, rule {rule}: {kind.replace('_', ' ')} ({placement.what})", fontsize=9)
+    ax.set_title(f"{track.name} {side} hand, rule {rule}: {kind.replace('_', ' ')}\n{placement.what}", fontsize=9)
     if trace.snapshot is not None:
-        centre = np.mean(trace.snapshot["boxes"][-1][1], axis=0)  # the object where it is then (a box: its lid)
-        render.draw(fig.add_subplot(grid[0, 2]), trace.snapshot, centre, half_width=0.12, axes=(0, 1))
+        render.draw(fig.add_subplot(grid[0, 2]), trace.snapshot, trace.snapshot_centre, half_width=0.12, axes=(0, 1))
     save_figure(fig, path, dpi=80)
 
 
