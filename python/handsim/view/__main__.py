@@ -31,8 +31,8 @@ def _screenshot(viewer, path: Path, width: int, height: int, timeout: float) -> 
     from .check import passes
     with Browser(width, height, timeout=timeout) as b:
         b.goto(viewer.url)
-        img = wait_until_drawn(b, viewer, timeout)
-    raster.save_png(img, path)
+        wait_until_drawn(b, viewer, timeout)
+    raster.save_png(b.page, path)  # the whole page: the 3D view (which the coverage is measured on) and controls
     print(f"screenshot: {path}")
     print(f"coverage: {json.dumps(b.coverage)}")
     if not passes(b.coverage):

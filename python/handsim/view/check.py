@@ -114,8 +114,9 @@ CANVAS_RECT = ("(() => { let best = null; for (const c of document.querySelector
 def wait_until_drawn(browser, viewer, timeout: float = 120.0, settle: float = 0.5):
     """Screenshots the page until the 3D view shows the viewer's last frame as expected (or `timeout` runs
     out; then the last screenshot). Returns the screenshot cropped to the 3D view (the controls docked beside
-    it are left out) and leaves the last measure in `browser.coverage`. A software-rendered page (no GPU) may
-    take many seconds per frame on a loaded machine, hence the long but bounded wait."""
+    it are left out); leaves the last measure in `browser.coverage` and the whole page in `browser.page`. A
+    software-rendered page (no GPU) may take many seconds per frame on a loaded machine, hence the long but
+    bounded wait."""
     deadline = time.monotonic() + timeout
     browser.coverage = None
     if not browser.wait_for(CANVAS_RECT + " !== null", timeout=timeout):
@@ -127,7 +128,8 @@ def wait_until_drawn(browser, viewer, timeout: float = 120.0, settle: float = 0.
         x, y, w, h = (int(round(v)) for v in browser.evaluate(CANVAS_RECT))
         if w < 16 or h < 16:
             continue
-        img = browser.screenshot()[y:y + h, x:x + w]
+        browser.page = browser.screenshot()
+        img = browser.page[y:y + h, x:x + w]
         cam = viewer.camera_for(img.shape[1], img.shape[0])
         browser.coverage = coverage(img, expected_masks(viewer.last_frame, cam))
         if passes(browser.coverage):

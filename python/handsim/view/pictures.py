@@ -1,7 +1,9 @@
 """Shaded perspective pictures from the viewer's scene description (:mod:`handsim.view.raster`).
 
     python -m handsim.view.pictures --out out/demo     the demo's pictures (what ``make demo`` writes)
-    python -m handsim.view.pictures --doc docs         docs/img/view_*.png for the hand and grasp pages
+    python -m handsim.view.pictures --doc docs         docs/img/view_hand.png, view_grasp.png (hand, grasp pages)
+    python -m handsim.view.pictures --out out/demo --doc docs    both, and the demo's filmstrip and close-ups
+                                                       copied to docs/img/view_filmstrip.png, view_closeup_lip.png
 
 The demo pictures: ``filmstrip.png`` (eight moments of the open and the close), ``demo.gif`` (the whole session),
 ``closeup_lip.png`` (the thumb under the lid's lip as the grasp begins, and while it swings the lid), and
@@ -11,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -111,7 +114,8 @@ def demo(out_dir: Path, gif_every: int = 6) -> int:
 
     # close-ups of the lip: the grasp as it begins, and mid-swing
     shots = [lip_frames[0], lip_frames[min(len(lip_frames) - 1, 4)]] if lip_frames else []
-    close = [raster.render(f, cam, labels=False,
+    # no shadows this close: the overhead light's shadow of the fingers falls on the tops at a grazing angle
+    close = [raster.render(f, cam, labels=False, shadows=False,
                            title=f"t = {info['t']:.2f} s, lid {info['lid']:.0f}°: thumb under the lip, fingers on top")
              for info, f, cam in shots]
     close_path = raster.save_png(np.concatenate(close, 1), out_dir / "closeup_lip.png") if close else None
@@ -185,8 +189,9 @@ def docs(doc_dir: Path) -> List[Path]:
     _demo.run(on_step, tasks=(("open", 3),))
     f = grabbed["frame"]
     ov, lip = grabbed["cams"]
-    tiles = [raster.render(f, ov, title="the right hand holds the lid (gold), the left holds the base"),
-             raster.render(f, lip, title="touching particles (red): thumb under the lip, finger on top")]
+    tiles = [raster.render(f, ov, title="held (gold outline): the lid by the right hand, the base by the left"),
+             raster.render(f, lip, labels=False, shadows=False,
+                           title="touching particles (red): thumb under the lip, fingers on top")]
     written.append(raster.save_png(np.concatenate(tiles, 1), img_dir / "view_grasp.png"))
     for p in written:
         print(f"wrote {p}")
@@ -205,6 +210,11 @@ def main(argv=None) -> int:
         status |= demo(args.out)
     if args.doc is not None:
         docs(args.doc)
+        if args.out is not None:  # both: the demo's filmstrip and close-ups go to the docs too
+            for name in ("filmstrip", "closeup_lip"):
+                target = args.doc / "img" / f"view_{name}.png"
+                shutil.copyfile(args.out / f"{name}.png", target)
+                print(f"wrote {target}")
     return status
 
 
