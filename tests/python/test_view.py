@@ -2,9 +2,11 @@
 extra and Chromium are there) the real viewer in a real headless browser."""
 import json
 import math
+import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -232,3 +234,17 @@ def test_browser_shows_the_hand_and_the_box(tmp_path):
     cov = json.loads(out.stdout.split("coverage: ", 1)[1].splitlines()[0])  # printed by --screenshot
     assert check.passes(cov), cov
     assert time.monotonic() - t0 < 240
+
+
+def test_view_command_opens_a_bvh_and_a_leap_recording(tmp_path):
+    """Tracker input goes through replay.session_from_motion into the same replay app (served 0 s)."""
+    from handsim.adapters.bvh import write_bvh
+    from handsim.view.__main__ import main
+    frames = [handsim.make_hand_frame(handsim.Handedness.RIGHT, [0, 0.9, -0.2, 0, 0, 0, 1], curl=0.02 * i)
+              for i in range(20)]
+    bvh = write_bvh(tmp_path / "hand.bvh", frames)
+    assert main([str(bvh), "--port", "0", "--seconds", "0", "--paused"]) == 0
+    root = os.environ.get("HANDSIM_SHARED_ASSETS") or Path(__file__).resolve().parents[3] / "shared" / "assets"
+    leap = Path(root) / "leap_recordings" / "pinch.json.lz"
+    if leap.is_file():  # the shared assets are optional: without them only the BVH is opened
+        assert main([str(leap), "--port", "0", "--seconds", "0", "--scene", "free_box"]) == 0
