@@ -1,5 +1,6 @@
 """The viewer's scene description, the offline renderer, viewing without side effects, and (when the 'view'
 extra and Chromium are there) the real viewer in a real headless browser."""
+import importlib.util
 import json
 import math
 import os
@@ -163,9 +164,12 @@ def test_render_puts_the_hand_and_box_where_the_camera_sees_them():
 
 # ---- the real viewer -------------------------------------------------------------------------------------
 
-viser = pytest.importorskip("viser", reason="the 'view' extra (viser) is not installed")
+# Only these need the 'view' extra; the scene description and the offline renderer above run without it.
+needs_viser = pytest.mark.skipif(importlib.util.find_spec("viser") is None,
+                                 reason="the 'view' extra (viser) is not installed")
 
 
+@needs_viser
 def test_viewer_does_not_change_the_simulation():
     from handsim.view.viewer import Viewer
     rec = _pinch_recording(30)
@@ -181,6 +185,7 @@ def test_viewer_does_not_change_the_simulation():
     assert plain.matches and v.frames_sent == rec.steps
 
 
+@needs_viser
 def test_viewer_rejects_a_bad_port_and_mode():
     from handsim.view.viewer import Viewer
     world, _, _ = _jewelry_world()
@@ -190,6 +195,7 @@ def test_viewer_rejects_a_bad_port_and_mode():
         Viewer(world, port=0, particles="rainbow")
 
 
+@needs_viser
 def test_replay_app_seeks_back_and_forth_to_the_same_state():
     from handsim.view.replay import ReplayApp
     rec = _pinch_recording(30)
@@ -208,6 +214,7 @@ def test_replay_app_seeks_back_and_forth_to_the_same_state():
         ReplayApp(rec, step=rec.steps, port=0)
 
 
+@needs_viser
 def test_view_command_rejects_bad_input(tmp_path):
     from handsim.view.__main__ import main
     assert main([str(tmp_path / "missing.npz")]) == 2
@@ -216,6 +223,7 @@ def test_view_command_rejects_bad_input(tmp_path):
     assert main([str(bad), "--port", "0", "--seconds", "0"]) == 2
 
 
+@needs_viser
 def test_browser_shows_the_hand_and_the_box(tmp_path):
     """The viewer on a recording, opened in headless Chromium: the screenshot shows the skin where the hand
     should be and the box's teal where the box should be (recall and precision of each, check.py)."""
@@ -236,6 +244,7 @@ def test_browser_shows_the_hand_and_the_box(tmp_path):
     assert time.monotonic() - t0 < 240
 
 
+@needs_viser
 def test_view_command_opens_a_bvh_and_a_leap_recording(tmp_path):
     """Tracker input goes through replay.session_from_motion into the same replay app (served 0 s)."""
     from handsim.adapters.bvh import write_bvh
