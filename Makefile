@@ -1,5 +1,5 @@
 # Thin wrappers over scripts/ and CMake. Each target runs the set-up first (it does nothing when done).
-.PHONY: demo test build bench experiments plugin clean
+.PHONY: demo test build wheel bench experiments plugin clean
 
 demo:
 	scripts/setup && scripts/build && .venv/bin/python samples/demo.py
@@ -9,6 +9,9 @@ test:
 
 build:
 	scripts/setup && scripts/build
+
+wheel:
+	scripts/setup && scripts/wheel
 
 bench:
 	scripts/setup && scripts/build && .venv/bin/python -m handsim.bench all
