@@ -252,15 +252,17 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
     EntryFace face{c.particle, R.transpose() * c.normal, 0};
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
     const bool touched_before = prev != previous.end() && prev->particle == c.particle;
-    const Vec3 relative = dv + dw.cross(x - pose.position);
+    // Only the particles that may have crossed the body need their motion relative to it (most contacts of a
+    // held body are neither inside nor leaving, and skip this).
+    auto relative = [&] { return Vec3(dv + dw.cross(x - pose.position)); };
     // How much deeper the entry face may say a particle coming out on the far side is than last frame: as far
     // as it moved relative to the body in two frames (slack for the lag of the velocity estimate), plus a
     // radius. More and it did not cross the body this frame (an 18 cm base, knocked spinning under the
     // fingers of the experiments' left hand, was thrown 13 cm by two particles answered with its far face).
-    const double reach = relative.norm() * kEntryFrames * dt + radius;
+    auto reach = [&] { return relative().norm() * kEntryFrames * dt + radius; };
     bool replaced = false;
     if (touched_before && (inside || (prev->crossing && prev->normal.dot(face.normal) < kOppositeFaces &&
-                                      radius - (prev->normal.dot(l) - prev->offset) <= prev->depth + reach))) {
+                                      radius - (prev->normal.dot(l) - prev->offset) <= prev->depth + reach()))) {
       // Inside, or leaving through the far side: a particle that was inside (or leaving) last frame and is now
       // nearest the face opposite the one it entered through, within its reach, has crossed the body, and
       // answering it with that face would push the body back the way the hand came (a hand driven past a
@@ -271,7 +273,7 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body
     } else if (inside && hand.has_velocity()) {
       // A centre inside at its first contact crossed the surface within the last frame; two frames of slack
       // for the lag of the velocity estimate (a 4-sample slope).
-      replaced = entry_face(body.prepared, l, R.transpose() * relative, kEntryFrames * dt, face.normal, face.offset);
+      replaced = entry_face(body.prepared, l, R.transpose() * relative(), kEntryFrames * dt, face.normal, face.offset);
     }
     face.crossing = inside || replaced;
     if (replaced) {
