@@ -10,8 +10,11 @@ HANDSIM_C_FIELDS(handsim_grasp_settings, GraspSettings) {
   f(c.cos_threshold, d.cos_threshold);
   f(c.release_distance, d.release_distance);
   f(c.tracking_grace_s, d.tracking_grace_s);
-  f(c.frames_to_grasp, d.frames_to_grasp);
-  f(c.frames_to_release, d.frames_to_release);
+  f(c.grasp_time_s, d.grasp_time_s);
+  f(c.release_time_s, d.release_time_s);
+  f(c.closing_distance, d.closing_distance);
+  f(c.closing_window_s, d.closing_window_s);
+  f(c.opening_distance, d.opening_distance);
   f(c.velocity_window, d.velocity_window);
   f(c.across_parts, d.across_parts);
 }

@@ -21,7 +21,7 @@ HANDSIM_API int HANDSIM_CALL handsim_world_create(const handsim_world_settings* 
     handsim_world*& out = deref(out_world, "out_world");
     const WorldDef def = settings ? from_c<WorldDef>(*settings) : WorldDef{};
     try {
-      validate_grasp_settings(def.grasp);  // it names the bare field ("frames_to_grasp")
+      validate_grasp_settings(def.grasp);  // it names the bare field ("grasp_time_s")
     } catch (const Error& e) {
       rethrow_renamed(e, "", "settings.grasp.");
     }

@@ -30,9 +30,10 @@
 
 /* ABI version: major << 16 | minor. The major changes when a struct layout or a function signature changes
  * (a host built against another major must not load this library); the minor when functions are added or a
- * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule). */
-#define HANDSIM_ABI_VERSION_MAJOR 1
-#define HANDSIM_ABI_VERSION_MINOR 1
+ * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule;
+ * 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand). */
+#define HANDSIM_ABI_VERSION_MAJOR 2
+#define HANDSIM_ABI_VERSION_MINOR 0
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -101,8 +102,11 @@ typedef struct handsim_grasp_settings {
   double cos_threshold;     /* -0.7: two penetration directions opposing by more than ~134 degrees */
   double release_distance;  /* m */
   double tracking_grace_s;  /* s */
-  int32_t frames_to_grasp;
-  int32_t frames_to_release;
+  double grasp_time_s;      /* s: opposing contacts of a closing hand this long begin a grasp */
+  double release_time_s;    /* s: this long without a hold ends it */
+  double closing_distance;  /* m: the hand's grip span shrank this much ... */
+  double closing_window_s;  /* s: ... within this time (0 distance: off) */
+  double opening_distance;  /* m: grip span opened this much over its tightest while held: let go (0: off) */
   int32_t velocity_window;
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
 } handsim_grasp_settings;

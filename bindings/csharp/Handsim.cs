@@ -169,8 +169,11 @@ namespace Handsim
         public double CosThreshold;
         public double ReleaseDistance;
         public double TrackingGraceS;
-        public int FramesToGrasp;
-        public int FramesToRelease;
+        public double GraspTimeS;
+        public double ReleaseTimeS;
+        public double ClosingDistance;
+        public double ClosingWindowS;
+        public double OpeningDistance;
         public int VelocityWindow;
         public int AcrossParts;  // bool
     }
@@ -533,7 +536,7 @@ namespace Handsim
     public static class Native
     {
         public const string Library = "handsim";
-        public const int AbiVersionMajor = 1;  // HANDSIM_ABI_VERSION_MAJOR of the handsim.h this file mirrors
+        public const int AbiVersionMajor = 2;  // HANDSIM_ABI_VERSION_MAJOR of the handsim.h this file mirrors
         public const int HandJointCount = 26;
         const CallingConvention Cdecl = CallingConvention.Cdecl;
 

@@ -88,8 +88,11 @@ void bind_defs(py::module_& m) {
   py::class_<GraspSettings> gs(m, "GraspSettings", "Grasp decision (eq. 3), hysteresis, release and tracking grace.");
   gs.def(py::init([](py::kwargs kw) { return from_kwargs<GraspSettings>(kw, "GraspSettings"); }))
       .def_readwrite("cos_threshold", &GraspSettings::cos_threshold)
-      .def_readwrite("frames_to_grasp", &GraspSettings::frames_to_grasp)
-      .def_readwrite("frames_to_release", &GraspSettings::frames_to_release)
+      .def_readwrite("grasp_time_s", &GraspSettings::grasp_time_s)
+      .def_readwrite("release_time_s", &GraspSettings::release_time_s)
+      .def_readwrite("closing_distance", &GraspSettings::closing_distance)
+      .def_readwrite("closing_window_s", &GraspSettings::closing_window_s)
+      .def_readwrite("opening_distance", &GraspSettings::opening_distance)
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
       .def_readwrite("velocity_window", &GraspSettings::velocity_window);

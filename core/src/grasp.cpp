@@ -98,9 +98,11 @@ bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vecto
 
 void validate_grasp_settings(const GraspSettings& s) {
   validate::finite(s.cos_threshold, "cos_threshold");
-  if (s.frames_to_grasp < 1) validate::fail("frames_to_grasp", "must be >= 1, got " + std::to_string(s.frames_to_grasp));
-  if (s.frames_to_release < 1)
-    validate::fail("frames_to_release", "must be >= 1, got " + std::to_string(s.frames_to_release));
+  validate::non_negative(s.grasp_time_s, "grasp_time_s");
+  validate::non_negative(s.release_time_s, "release_time_s");
+  validate::non_negative(s.closing_distance, "closing_distance");
+  validate::non_negative(s.closing_window_s, "closing_window_s");
+  validate::non_negative(s.opening_distance, "opening_distance");
   validate::non_negative(s.release_distance, "release_distance");
   validate::non_negative(s.tracking_grace_s, "tracking_grace_s");
   if (s.velocity_window < 2) validate::fail("velocity_window", "must be >= 2, got " + std::to_string(s.velocity_window));
@@ -117,6 +119,7 @@ void GraspTracker::reset() {
   state_ = GraspState::Free;
   grasp_streak_ = open_streak_ = 0;
   untracked_s_ = 0;
+  tightest_ = 0;
 }
 
 GraspEvent GraspTracker::update(const GraspInput& in) {
@@ -125,14 +128,18 @@ GraspEvent GraspTracker::update(const GraspInput& in) {
   return state_ == GraspState::Free ? update_free(in) : update_grasped(in);
 }
 
+// A streak of `time` s has lasted `needed`; the slack keeps 2 frames of 1/60 s from falling short of 1/30 s.
+static bool lasted(double time, double needed) { return time >= needed - 1e-9; }
+
 GraspEvent GraspTracker::update_free(const GraspInput& in) {
   // An untracked hand's contacts are stale: it cannot start a grasp, and it breaks a streak.
-  bool condition = in.hand_tracked && in.opposing && in.contact_count >= 2;
-  grasp_streak_ = condition ? grasp_streak_ + 1 : 0;
-  if (grasp_streak_ < settings_.frames_to_grasp) return {};
+  bool condition = in.hand_tracked && in.opposing && in.contact_count >= 2 && in.closing;
+  grasp_streak_ = condition ? grasp_streak_ + in.dt : 0;
+  if (!condition || !lasted(grasp_streak_, settings_.grasp_time_s)) return {};
   state_ = GraspState::Grasped;
   grasp_streak_ = open_streak_ = 0;
   untracked_s_ = 0;
+  tightest_ = in.span;
   return {GraspEventType::GraspBegin, ReleaseReason::None, false};
 }
 
@@ -143,14 +150,59 @@ GraspEvent GraspTracker::update_grasped(const GraspInput& in) {
     return untracked_s_ > settings_.tracking_grace_s ? end(ReleaseReason::TrackingLost) : GraspEvent{};
   }
   untracked_s_ = 0;
-  const bool holding = in.opposing && in.contact_count >= 2;
-  open_streak_ = holding ? 0 : open_streak_ + 1;
-  return open_streak_ >= settings_.frames_to_release ? end(ReleaseReason::Released) : GraspEvent{};
+  tightest_ = std::min(tightest_, in.span);
+  const bool opened = settings_.opening_distance > 0 && in.span > tightest_ + settings_.opening_distance;
+  const bool holding = in.opposing && in.contact_count >= 2 && !opened;
+  open_streak_ = holding ? 0 : open_streak_ + in.dt;
+  return !holding && lasted(open_streak_, settings_.release_time_s) ? end(ReleaseReason::Released) : GraspEvent{};
 }
 
 GraspEvent GraspTracker::end(ReleaseReason reason) {
   reset();
   return {GraspEventType::GraspEnd, reason, reason == ReleaseReason::TrackingLost};
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Grip span and its history
+
+double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones) {
+  auto joint = [&](int j) { return Vec3(bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
+  const Vec3 palm = joint(kPalm);
+  double span = (joint(kThumbTip) - joint(kIndexTip)).norm();
+  for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) span += (joint(tip) - palm).norm();
+  return span;
+}
+
+void GripHistory::push(double span, const Vec3& palm, double time, double window) {
+  validate::finite(span, "span");
+  validate::finite(palm, "palm");
+  validate::finite(time, "time");
+  if (!samples_.empty() && !(time > samples_.back().time))
+    validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(samples_.back().time));
+  samples_.push_back({span, palm, time});
+  size_t old = 0;
+  while (old + 1 < samples_.size() && samples_[old].time < time - window - 1e-9) ++old;
+  samples_.erase(samples_.begin(), samples_.begin() + std::ptrdiff_t(old));
+}
+
+double GripHistory::closed_by() const {
+  double widest = 0;
+  for (const Sample& s : samples_) widest = std::max(widest, s.span);
+  return samples_.empty() ? 0.0 : widest - samples_.back().span;
+}
+
+double GripHistory::approached_by(const GripHistory& other) const {
+  // Both hands are pushed at each step's end time, so shared times are equal bit for bit.
+  double widest = -1, now = -1;
+  size_t j = other.samples_.size();
+  for (size_t i = samples_.size(); i-- > 0 && j > 0;) {
+    while (j > 0 && other.samples_[j - 1].time > samples_[i].time) --j;
+    if (j == 0 || other.samples_[j - 1].time != samples_[i].time) continue;
+    const double d = (samples_[i].palm - other.samples_[j - 1].palm).norm();
+    if (now < 0) now = d;
+    widest = std::max(widest, d);
+  }
+  return now < 0 ? 0.0 : widest - now;
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -5,7 +5,10 @@
 
 #include "handsim/grasp_settings.h"
 #include "handsim/types.h"
+#include "handsim/hand.h"
 #include "pose_fit.h"
+
+#include <array>
 
 #include <vector>
 
@@ -41,11 +44,14 @@ struct GraspInput {
   int contact_count = 0;    // particles of this hand touching the object (>= 0)
   bool hand_tracked = true; // HandFrame::tracked()
   double dt = 0;            // frame duration (s), finite and > 0
+  bool closing = true;      // the hand closed lately (GripHistory::closed_by >= closing_distance)
+  double span = 0;          // the hand's grip span now (m, grip_span); for opening_distance
 };
 
 // The grasp state machine of one (hand, object) pair.
-//  Free -> Grasped: tracked, opposing and >= 2 contacts for frames_to_grasp consecutive frames.
-//  Grasped -> Free (Released): tracked without an opposing pair for frames_to_release consecutive frames.
+//  Free -> Grasped: tracked, opposing, >= 2 contacts and closing for grasp_time_s (consecutive frames).
+//  Grasped -> Free (Released): tracked without an opposing pair, or with the hand opened by more than
+//    opening_distance over its tightest span since the grasp began, for release_time_s.
 //    The world counts a held object's contacts within GraspSettings::release_distance of its surface, so
 //    fingers that slide on it or jitter off it by less than that keep it; fingers that open further drop it,
 //    even while one finger or the palm still touches it (a box resting against the index after the thumb
@@ -71,9 +77,38 @@ class GraspTracker {
 
   GraspSettings settings_;
   GraspState state_ = GraspState::Free;
-  int grasp_streak_ = 0;    // consecutive frames meeting the grasp condition (Free)
-  int open_streak_ = 0;     // consecutive tracked frames without an opposing pair (Grasped)
+  double grasp_streak_ = 0;  // time (s) of consecutive frames meeting the grasp condition (Free)
+  double open_streak_ = 0;   // time (s) of consecutive tracked frames without a hold (Grasped)
+  double tightest_ = 0;      // the smallest grip span since the grasp began (Grasped)
   double untracked_s_ = 0;  // time since tracking was lost (Grasped)
+};
+
+// The grip span of a hand (m): the four fingertips' distances to the palm joint plus the thumb tip's distance
+// to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
+// pinch shortens it; moving or turning the hand as a whole does not change it.
+double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones);
+
+// A hand's grip span and palm position over the last `window` seconds, for GraspSettings::closing_distance.
+class GripHistory {
+ public:
+  // Times must increase (throws handsim::Error); samples older than the window before the newest are dropped.
+  void push(double span, const Vec3& palm, double time, double window);
+  void clear() { samples_.clear(); }
+  bool empty() const { return samples_.empty(); }
+  double span() const { return samples_.empty() ? 0.0 : samples_.back().span; }
+  // How much the span shrank from its widest in the window to now (>= 0).
+  double closed_by() const;
+  // How much the distance between this hand's palm and `other`'s shrank from its widest in the window to
+  // now, over the samples both have at the same times (0 when they share none).
+  double approached_by(const GripHistory& other) const;
+
+ private:
+  struct Sample {
+    double span = 0;
+    Vec3 palm = Vec3::Zero();
+    double time = 0;
+  };
+  std::vector<Sample> samples_;  // oldest first; a few dozen at most
 };
 
 // The last few palm poses of a hand, for the velocity a released object is thrown with.

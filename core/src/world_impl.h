@@ -90,6 +90,7 @@ struct HandSlot {
   std::shared_ptr<const HandModel> model;
   HandState state;
   HandMotionHistory history;
+  GripHistory grip;  // grip span and palm over the last closing_window_s (GraspSettings::closing_distance)
   Pose palm;
   bool has_pose = false;  // a tracked frame has been seen
   Eigen::Matrix3Xd render;
@@ -126,6 +127,7 @@ struct HandBodyPair {
   // Per touching particle (sorted by particle), the face it entered the body through: contacts of a particle
   // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
   std::vector<EntryFace> entry_faces, previous_faces;
+  bool opposing_alone = false;  // this step: eq. 3 over this hand's contacts alone (decide_grasps)
 };
 
 struct World::Impl {
@@ -221,6 +223,15 @@ struct World::Impl {
                             std::vector<std::pair<int, int>>& ranges) const;
   std::string deform_hands();
   std::string decide_grasps(double dt);
+  struct Intent {
+    bool opposing = false;  // eq. 3 (across parts when a grasp would begin)
+    bool closing = false;   // the hand closed by closing_distance within closing_window_s
+  };
+  Intent hand_intent(const HandBodyPair& pair, uint32_t hand, std::vector<Vec3>& directions,
+                     std::vector<int>& parts) const;
+  bool hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
+                    std::vector<int>& parts) const;
+  double closing_needed() const;
   std::string follow_primary_hands();
   std::string fit_touched_bodies(double dt);
   std::string simulate(double dt);

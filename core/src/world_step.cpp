@@ -10,6 +10,10 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <tuple>
 
 namespace handsim {
 
@@ -68,6 +72,7 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     if (!frame || !frame->tracked()) {
       h.state.tracked = false;
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
+      h.grip.clear();     // nor have closed on what it finds there
       continue;
     }
     // The frame was validated by validate_step: pose the bones, then skin the particles only when the hand's
@@ -91,6 +96,7 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
+    h.grip.push(grip_span(*h.model, h.state.bones), h.palm.position, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
     if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;
@@ -440,6 +446,13 @@ std::string World::Impl::deform_hands() {
 
 namespace {
 
+}  // namespace
+
+// The span a hand must have closed by lately to begin a grasp; 0 (off) is met by any hand.
+double World::Impl::closing_needed() const { return def.grasp.closing_distance; }
+
+namespace {
+
 // The rigid part of the hand particle p moves with (GraspSettings::across_parts): its most weighted bone, with
 // the palm, the wrist and the five metacarpals as one part (kPalm) and a tip as part of its distal bone. The
 // thumb's metacarpal (the ball of the thumb) counts as palm: a flat palm pressed 3-10 mm down onto a box
@@ -461,12 +474,48 @@ int rigid_part(const HandModel& model, int p) {
 
 }  // namespace
 
+// Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
+// Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
+// contacts (hundreds on a pinched lid) need no parts. `directions` and `parts` are scratch space.
+World::Impl::Intent World::Impl::hand_intent(const HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
+                                             std::vector<int>& parts) const {
+  const double cos = def.grasp.cos_threshold;
+  const bool across = def.grasp.across_parts && !pair.tracker.grasped();
+  directions.clear();
+  parts.clear();
+  for (const ParticleContact& c : pair.contacts) {
+    directions.push_back(c.normal);
+    if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
+  }
+  Intent out;
+  out.opposing = pair.contacts.size() >= 2 && (across ? opposing_across_parts(directions, parts, cos)
+                                                      : opposing_contacts(directions, cos));
+  out.closing = hands[hi].grip.closed_by() >= closing_needed();
+  return out;
+}
+
+// Eq. 3 across two hands touching one body: a contact of one opposes a contact of the other.
+bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
+                               std::vector<int>& parts) const {
+  directions.clear();
+  parts.clear();
+  for (const ParticleContact& c : a.contacts) directions.push_back(c.normal), parts.push_back(0);
+  for (const ParticleContact& c : b.contacts) directions.push_back(c.normal), parts.push_back(1);
+  return opposing_across_parts(directions, parts, def.grasp.cos_threshold);
+}
+
 // --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
 std::string World::Impl::decide_grasps(double dt) {
   std::vector<Vec3> directions;
   std::vector<int> parts;
+  std::vector<Intent> alone;  // per pair in map order: eq. 3 and closing of its hand by itself
+  for (auto& [key, pair] : pairs) {
+    alone.push_back(bodies[key.second].manipulable() ? hand_intent(pair, key.first, directions, parts) : Intent{});
+    pair.opposing_alone = alone.back().opposing;
+  }
   int decided = 0;
-  for (auto it = pairs.begin(); it != pairs.end();) {
+  size_t k = 0;
+  for (auto it = pairs.begin(); it != pairs.end(); ++k) {
     const uint32_t hi = it->first.first, bi = it->first.second;
     HandBodyPair& pair = it->second;
     Body& b = bodies[bi];
@@ -476,19 +525,23 @@ std::string World::Impl::decide_grasps(double dt) {
     if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, body_id(bi)});
     pair.previous_count = count;
     if (b.manipulable()) {
-      // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
-      // contacts (hundreds on a pinched lid) need no parts.
-      const double cos = def.grasp.cos_threshold;
-      const bool across = def.grasp.across_parts && !pair.tracker.grasped();
-      directions.clear();
-      parts.clear();
-      for (const ParticleContact& c : pair.contacts) {
-        directions.push_back(c.normal);
-        if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
-      }
-      const bool opposing = count >= 2 && (across ? opposing_across_parts(directions, parts, cos)
-                                                  : opposing_contacts(directions, cos));
-      const GraspEvent e = pair.tracker.update({opposing, count, hands[hi].state.tracked, dt});
+      const HandSlot& h = hands[hi];
+      const Intent own = alone[k];
+      Intent intent = own;
+      // Two hands squeezing one body (two flat palms on a big box): eq. 3 across the hands, closing as the
+      // palms approach each other. Each hand alone has its contacts on one face only. A hand that holds the
+      // body by itself needs no partner, and does not lend one: a finger of the other hand still resting on
+      // a body it handed over is no grip (SecondHandSlipsThenTakesOverWithoutAJump).
+      if (!own.opposing)
+        for (const auto& [other, other_pair] : pairs)
+          if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
+              hands[other.first].state.tracked && hands_oppose(pair, other_pair, directions, parts)) {
+            intent.opposing = true;
+            intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed();
+            if (intent.closing) break;
+          }
+      const GraspEvent e =
+          pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
       if (e.type == GraspEventType::GraspEnd)
         end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);

@@ -29,7 +29,8 @@ from . import scenes as _scenes
 FORMAT = "handsim-recording"
 FORMAT_VERSION = 1
 J = _core.JOINT_COUNT
-_GRASP_FIELDS = ("cos_threshold", "across_parts", "frames_to_grasp", "frames_to_release", "release_distance",
+_GRASP_FIELDS = ("cos_threshold", "across_parts", "grasp_time_s", "release_time_s",
+                 "closing_distance", "closing_window_s", "opening_distance", "release_distance",
                  "tracking_grace_s", "velocity_window")
 _WORLD_FIELDS = ("fixed_substep", "max_substeps", "ground", "ground_friction", "ground_height",
                  "joint_max_iterations", "solver_iterations", "paper_pipeline")

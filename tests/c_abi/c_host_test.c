@@ -538,8 +538,8 @@ static void test_bad_inputs(void) {
   settings.fixed_substep = 0;
   REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.fixed_substep: must be");
   MUST(handsim_world_settings_default(&settings));
-  settings.grasp.frames_to_grasp = 0;
-  REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.grasp.frames_to_grasp");
+  settings.grasp.grasp_time_s = -1;
+  REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.grasp.grasp_time_s");
   MUST(handsim_world_settings_default(&settings));
   settings.particle_contacts = 5;
   REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.particle_contacts");

@@ -239,7 +239,7 @@ TEST(GraspTracker, RejectsBadInputAndSettings) {
   EXPECT_THROW(t.update(frame(true, 2, true, 0.0)), Error);
   EXPECT_THROW(t.update(frame(true, -1)), Error);
   GraspSettings s;
-  s.frames_to_grasp = 0;
+  s.grasp_time_s = -1;
   EXPECT_THROW(GraspTracker{s}, Error);
   s = {};
   s.tracking_grace_s = -1;

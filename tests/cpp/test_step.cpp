@@ -357,6 +357,92 @@ TEST(Step, HandPressedDownOntoABoxDoesNotGraspIt) {
   }
 }
 
+// Two flat palms squeeze a 30 cm, 1 kg box on the ground from opposite sides (issue 20, item 4). Each palm
+// alone touches one face, so neither hand grasps by itself; eq. 3 across the hands does, and the first hand
+// (primary, eq. 5) carries the box while the second slips. `approach` (m): how far each palm travels in to
+// its squeeze, 1 cm into the box; `closing` the GraspSettings::closing_distance.
+struct Squeeze {
+  int grasp_begins = 0, grasp_ends = 0;
+  bool held_by_both = false;
+  double lift = 0;       // the box's highest rise (m)
+  double fell_to = 1e9;  // its height after the palms part
+};
+
+Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true) {
+  WorldDef def;
+  def.grasp.closing_distance = closing;
+  World world(def);
+  const HandId right = world.add_hand(HandDef{});
+  const HandId left = world.add_hand(HandDef{Handedness::Left});
+  const double half = 0.15;
+  BodyDef box;
+  box.shape = ShapeDef::box(Vec3::Constant(half));
+  box.mass = 1.0;
+  box.pose.position = Vec3(0, half, 0);
+  const BodyId body = world.add_body(box);
+  for (int i = 0; i < 30; ++i) world.step(kDt);
+  // The palm faces -Y in its own frame; turned about Z the right palm faces -X, the left +X. How far the palm
+  // skin lies below the palm joint: the particle nearest the box along the palm normal, near the palm centre.
+  const Quat faces_minus_x(Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitZ())), faces_plus_x(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()));
+  HandState state;
+  const HandFrame probe = make_hand_frame(Handedness::Right, Pose{Vec3::Zero(), faces_minus_x});
+  pose_hand(world.hand_model(right), probe, state);
+  const Vec3 palm = probe.joints[kPalm].position;
+  const Vec3 left_palm = make_hand_frame(Handedness::Left, Pose{Vec3::Zero(), faces_plus_x}).joints[kPalm].position;
+  double skin = 0;
+  for (Eigen::Index p = 0; p < state.tracked_positions.cols(); ++p) {
+    const Vec3 x = state.tracked_positions.col(p) - palm;
+    if (std::hypot(x.y(), x.z()) < 0.03) skin = std::max(skin, -x.x());
+  }
+  skin += world.hand_model(right).particle_radius;
+  Squeeze out;
+  auto frames = [&](double gap, double y) {
+    // gap: the palm skin's distance outside the box face (negative: pressed in); the left hand mirrors the
+    // right across x = 0 (its palm joint sits where the right one's would, mirrored).
+    const double x = half + gap + skin;
+    const HandFrame r = make_hand_frame(Handedness::Right, Pose{Vec3(x, y, 0) - palm, faces_minus_x});
+    const HandFrame l = make_hand_frame(Handedness::Left, Pose{Vec3(-x, y, 0) - left_palm, faces_plus_x});
+    return two_hands ? std::vector<HandFrame>{r, l} : std::vector<HandFrame>{r};
+  };
+  auto step = [&](double gap, double y) {
+    world.step(kDt, frames(gap, y));
+    for (const Event& e : world.events()) {
+      out.grasp_begins += e.type == EventType::GraspBegin;
+      out.grasp_ends += e.type == EventType::GraspEnd;
+    }
+    const GraspInfo g = world.body_grasp(body);
+    out.held_by_both |= g.grasped && g.primary == right && g.secondary == left;
+    out.lift = std::max(out.lift, world.body_pose(body).position.y() - half);
+  };
+  const double in = -0.01, start = in + approach;
+  for (int i = 0; i <= 30; ++i) step(start + (in - start) * i / 30.0, half);  // squeeze in over 0.5 s
+  for (int i = 0; i < 10; ++i) step(in, half);
+  for (int i = 1; i <= 60; ++i) step(in, half + 0.2 * smoothstep(i / 60.0));  // lift 20 cm over 1 s
+  for (int i = 1; i <= 20; ++i) step(in + 0.05 * i / 20.0, half + 0.2);      // the palms part 5 cm
+  for (int i = 0; i < 60; ++i) step(0.04, half + 0.2);
+  out.fell_to = world.body_pose(body).position.y() - half;
+  return out;
+}
+
+TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
+  const Squeeze s = squeeze_big_box(0.04, 0.0);
+  EXPECT_EQ(s.grasp_begins, 2);
+  EXPECT_TRUE(s.held_by_both);
+  EXPECT_NEAR(s.lift, 0.2, 0.005);
+  EXPECT_EQ(s.grasp_ends, 2);                 // parting the palms lets go
+  EXPECT_NEAR(s.fell_to, 0.0, 0.005);         // and the box falls back to the ground
+  // One palm alone pushes the box and never grasps it.
+  const Squeeze one = squeeze_big_box(0.04, 0.0, false);
+  EXPECT_EQ(one.grasp_begins, 0);
+  EXPECT_LT(one.lift, 0.005);
+  // With the closing rule the palms closing 4 cm on the box grasp it; palms put against it that never
+  // approach it (1 mm of travel) do not.
+  const Squeeze closing = squeeze_big_box(0.04, 0.015);
+  EXPECT_EQ(closing.grasp_begins, 2);
+  EXPECT_NEAR(closing.lift, 0.2, 0.005);
+  EXPECT_EQ(squeeze_big_box(0.001, 0.015).grasp_begins, 0);
+}
+
 // Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
 // one grasp begins and ends. Without hysteresis (1 frame each way, no release margin) the same input flickers,
 // which shows that the count would catch it.
@@ -372,8 +458,8 @@ int dithering_grasp_events(const GraspSettings& grasp) {
 TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
   EXPECT_LE(dithering_grasp_events(GraspSettings{}), 2);
   GraspSettings none;
-  none.frames_to_grasp = 1;
-  none.frames_to_release = 1;
+  none.grasp_time_s = 0;
+  none.release_time_s = 0;
   none.release_distance = 0;
   EXPECT_GE(dithering_grasp_events(none), 40);
 }
@@ -635,7 +721,7 @@ TEST(Step, SetBodyPoseOnAHeldBodyKeepsItHeldThere) {
   expect_pose_near(s.world.hand_palm_pose(s.hand) * s.world.body_grasp(s.box).primary_relative, nudged, 1e-12, "rel");
   const Pose away = translation(Vec3(0, 0.1, 0)) * nudged;
   s.world.set_body_pose(s.box, away);
-  const int m = s.world.def().grasp.frames_to_release;
+  const int m = int(std::ceil(s.world.def().grasp.release_time_s / kDt - 1e-9));  // frames at 60 Hz
   for (int i = 1; i < m; ++i) {
     s.step({hold});
     expect_pose_near(s.world.body_pose(s.box), away, 1e-12, "away, frame " + std::to_string(i));
@@ -692,12 +778,12 @@ HysteresisRow measure_hysteresis(const GraspSettings& g, double sigma, double gr
 }
 
 TEST(Step, DISABLED_MeasureGraspHysteresis) {
-  std::printf("frames_to_grasp frames_to_release release_distance_mm | dither_events releases(firm,1.5mm) "
+  std::printf("grasp_time_frames release_time_frames release_distance_mm | dither_events releases(firm,1.5mm) "
               "releases(firm,3mm) releases(light,1.5mm) grasp_latency_frames release_latency_frames\n");
   auto row = [](int k, int m, double d) {
     GraspSettings g;
-    g.frames_to_grasp = k;
-    g.frames_to_release = m;
+    g.grasp_time_s = k * kDt;
+    g.release_time_s = m * kDt;
     g.release_distance = d;
     const HysteresisRow r = measure_hysteresis(g, 0.0015, 0.003), r3 = measure_hysteresis(g, 0.003, 0.003),
                         light = measure_hysteresis(g, 0.0015, 0.0005);

@@ -425,7 +425,7 @@ def test_grasp_events_and_stage_reports():
     plate = world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05, 0.001, 0.02]), mass=0.1,
                                            pose=[0, 0.5, -0.08, 0, 0, 0, 1]))
     palm = np.array([0, 0.5, 0, 0, 0, 0, 1.0])
-    frames_to_grasp = world.definition.grasp.frames_to_grasp
+    frames_to_grasp = math.ceil(world.definition.grasp.grasp_time_s / DT - 1e-9)  # grasp_time_s at 60 Hz
     types = []
     for _ in range(frames_to_grasp):
         world.step(DT, [handsim.make_hand_frame(RIGHT, palm)])
@@ -464,14 +464,17 @@ def test_grasp_events_and_stage_reports():
 
 def test_grasp_settings_and_particle_contacts_on_the_world_def():
     assert handsim.OPPOSING_COS == -0.7 and handsim.PAPER_LITERAL_COS == 0.7
-    d = handsim.WorldDef(grasp=handsim.GraspSettings(cos_threshold=handsim.PAPER_LITERAL_COS, frames_to_grasp=3),
+    d = handsim.WorldDef(grasp=handsim.GraspSettings(cos_threshold=handsim.PAPER_LITERAL_COS, grasp_time_s=0.05),
                          particle_contacts=handsim.ParticleContacts.BULLET_OBJECTS)
-    d.grasp.frames_to_release = 5
+    d.grasp.release_time_s = 0.08
+    d.grasp.closing_distance = 0.02
+    d.grasp.opening_distance = 0.03
     assert d.grasp.across_parts  # docs/grasp.md: one rigid part of the hand does not grasp
     d.grasp.across_parts = False
     world = handsim.World(d)
-    assert world.definition.grasp.cos_threshold == 0.7 and world.definition.grasp.frames_to_grasp == 3
-    assert world.definition.grasp.frames_to_release == 5 and not world.definition.grasp.across_parts
+    g = world.definition.grasp
+    assert g.cos_threshold == 0.7 and g.grasp_time_s == 0.05 and g.release_time_s == 0.08
+    assert g.closing_distance == 0.02 and g.opening_distance == 0.03 and not g.across_parts
     assert world.definition.particle_contacts == handsim.ParticleContacts.BULLET_OBJECTS
     with pytest.raises(TypeError, match="unexpected keyword argument 'threshold'"):
         handsim.GraspSettings(threshold=1)

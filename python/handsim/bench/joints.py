@@ -747,7 +747,7 @@ def report_markdown(result, command, figures):
     w("The world gives the grasped soft lid, every substep, the velocity that would carry it to the hand's pose")
     w("for it; the constraint takes back only part of the resulting error per substep, so while the hand pulls")
     w("past the limit the lid hangs behind the hinge by the difference. The grasp ends when the fingers'")
-    w("contacts with the lid are gone for `GraspSettings.frames_to_release` frames, as the grip swings on past")
+    w("contacts with the lid are gone for `GraspSettings.release_time_s`, as the grip swings on past")
     w("the stopped lid (the grasped-frames column). The hard lid's angle never exceeds "
       f"{max(math.degrees(groups['hard', i]['max_angle_rad']) for i in (10, 200)):.4f} deg.")
     w("")
