@@ -531,8 +531,9 @@ std::string World::Impl::decide_grasps(double dt) {
       // Two hands squeezing one body (two flat palms on a big box): eq. 3 across the hands, closing as the
       // palms approach each other. Each hand alone has its contacts on one face only. A hand that holds the
       // body by itself needs no partner, and does not lend one: a finger of the other hand still resting on
-      // a body it handed over is no grip (SecondHandSlipsThenTakesOverWithoutAJump).
-      if (!own.opposing)
+      // a body it handed over is no grip (SecondHandSlipsThenTakesOverWithoutAJump). Only with the closing
+      // rule: without it, two open hands flapping about a cube (Leap recording flapping) grasped it.
+      if (!own.opposing && closing_needed() > 0)
         for (const auto& [other, other_pair] : pairs)
           if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
               hands[other.first].state.tracked && hands_oppose(pair, other_pair, directions, parts)) {

@@ -680,8 +680,8 @@ def parse_rule(spec: str) -> Tuple[str, object]:
     if spec == "paper":
         s.cos_threshold = _core.PAPER_LITERAL_COS
         s.across_parts = False
-        s.frames_to_grasp = 1
-        s.frames_to_release = 1
+        s.grasp_time_s = 0
+        s.release_time_s = 0
         return spec, s
     name, _, fields = spec.partition(":")
     if not name or not fields:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the Godot sample headless and checks it: lays out a copy of project/ in <work_dir> with the addon folder
-# <addon_dir> (handsim.gdnlib, handsim_world.gdns, bin/x11_64/ with libhandsim_godot.so and libhandsim.so.1: the
+# <addon_dir> (handsim.gdnlib, handsim_world.gdns, bin/x11_64/ with libhandsim_godot.so and libhandsim.so.2: the
 # build's build/dev/samples/godot/addons/handsim or the plugin bundle's godot/addons/handsim) and the session
 # <session.hsframes> (samples/godot/record_session.py writes it), runs HandsimWorld's bad-input and live-frame checks and the
 # project under godot3-server, and checks the result line: every step's hash equal to the recorded one, the final

@@ -249,6 +249,64 @@ TEST(GraspTracker, RejectsBadInputAndSettings) {
   EXPECT_THROW(validate_grasp_settings(s), Error);
 }
 
+// The hysteresis is in seconds: the same 0.03 s of opposing contacts takes 1 frame at 30 Hz, 2 at 60 Hz and
+// 4 at 120 Hz (issue 20: the decision must not depend on the tracker's rate).
+TEST(GraspTracker, HysteresisIsInSecondsNotFrames) {
+  for (auto [hz, frames] : {std::pair{30.0, 1}, std::pair{60.0, 2}, std::pair{120.0, 4}}) {
+    GraspTracker t;
+    int begun = -1;
+    for (int i = 0; i < 10 && begun < 0; ++i)
+      if (t.update(frame(true, 4, true, 1 / hz)).type == GraspEventType::GraspBegin) begun = i + 1;
+    EXPECT_EQ(begun, frames) << hz << " Hz";
+  }
+}
+
+// closing_distance: opposing contacts of a hand that is not closing never begin a grasp; the same contacts
+// while it closes do. opening_distance: a held body is let go once the span opens that far over its tightest
+// since the grasp began, though the contacts still oppose.
+TEST(GraspTracker, ClosingBeginsAndOpeningEnds) {
+  GraspSettings s;
+  s.closing_distance = 0.015;
+  s.opening_distance = 0.025;
+  GraspTracker t(s);
+  GraspInput still = frame(true, 8);
+  still.closing = false;
+  still.span = 0.5;
+  for (int i = 0; i < 60; ++i) EXPECT_EQ(t.update(still).type, GraspEventType::None);
+  GraspInput closing = still;
+  closing.closing = true;
+  EXPECT_EQ(t.update(closing).type, GraspEventType::None);
+  EXPECT_EQ(t.update(closing).type, GraspEventType::GraspBegin);
+  GraspInput held = still;  // still closing no more: a held body needs no closing
+  for (double span : {0.5, 0.45, 0.40, 0.42, 0.424}) {
+    held.span = span;
+    EXPECT_EQ(t.update(held).type, GraspEventType::None) << span;  // tightest 0.40, opened 2.4 cm at most
+  }
+  held.span = 0.426;  // 2.6 cm over the tightest: open for release_time_s (3 frames at 60 Hz)
+  EXPECT_EQ(t.update(held).type, GraspEventType::None);
+  EXPECT_EQ(t.update(held).type, GraspEventType::None);
+  const GraspEvent e = t.update(held);
+  EXPECT_EQ(e.type, GraspEventType::GraspEnd);
+  EXPECT_EQ(e.reason, ReleaseReason::Released);
+}
+
+// GripHistory: how much the span shrank within the window, and how far two hands' palms approached.
+TEST(GripHistory, ClosedByAndApproachedByWithinTheWindow) {
+  GripHistory a, b;
+  EXPECT_EQ(a.closed_by(), 0.0);
+  for (int i = 0; i <= 60; ++i) {
+    const double t = i / 60.0;
+    a.push(0.6 - 0.1 * std::max(t - 0.5, 0.0), Vec3(0.2 - 0.1 * t, 0, 0), t, 0.5);  // closes 5 cm in the last 0.5 s
+    b.push(0.6, Vec3(-0.2, 0, 0), t, 0.5);
+  }
+  EXPECT_NEAR(a.closed_by(), 0.05, 1e-12);  // widest in the window (t = 0.5 s) 0.6, now 0.55
+  EXPECT_NEAR(a.span(), 0.55, 1e-12);
+  EXPECT_NEAR(a.approached_by(b), 0.05, 1e-9);  // palms 0.35 m apart at t = 0.5 s, 0.3 m at t = 1 s
+  EXPECT_EQ(b.closed_by(), 0.0);
+  EXPECT_THROW(a.push(0.5, Vec3::Zero(), 0.5, 0.5), Error);  // time must increase
+  EXPECT_THROW(a.push(NAN, Vec3::Zero(), 2.0, 0.5), Error);
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // HandMotionHistory
 

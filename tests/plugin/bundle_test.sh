@@ -62,8 +62,8 @@ ldd_ok() {
 while IFS= read -r so; do
   check "ldd $(realpath --relative-to="$b" "$so")" ldd_ok "$so"
 done < <(find "$b" -type f -name '*.so*')
-echo "ldd lib/libhandsim.so.1:"
-ldd "$b/lib/libhandsim.so.1" | sed "s|$work/||; s| (0x[0-9a-f]*)||; s|^[[:space:]]*|  |" || true
+echo "ldd lib/libhandsim.so.2:"
+ldd "$b/lib/libhandsim.so.2" | sed "s|$work/||; s| (0x[0-9a-f]*)||; s|^[[:space:]]*|  |" || true
 
 # 2. The C host test against include/ and lib/ (handsim_layout.inc, a test input, from the source tree).
 c_host() {

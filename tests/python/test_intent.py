@@ -151,12 +151,12 @@ def test_reach_needs_the_hand_on_opposite_faces_closer_than_the_object():
 
 
 def test_bad_rules_name_the_field():
-    for bad in ("", "mine", "mine:", "mine:nonsense=1", "mine:cos_threshold=abc", "mine:frames_to_grasp=0",
+    for bad in ("", "mine", "mine:", "mine:nonsense=1", "mine:cos_threshold=abc", "mine:grasp_time_s=-1",
                 "mine:across_parts=maybe"):
         with pytest.raises(ValueError, match="rule"):
             intent.parse_rule(bad)
-    name, s = intent.parse_rule("strict:cos_threshold=-0.9,frames_to_grasp=3,across_parts=false")
-    assert name == "strict" and s.cos_threshold == -0.9 and s.frames_to_grasp == 3 and not s.across_parts
+    name, s = intent.parse_rule("strict:cos_threshold=-0.9,grasp_time_s=0.05,across_parts=false")
+    assert name == "strict" and s.cos_threshold == -0.9 and s.grasp_time_s == 0.05 and not s.across_parts
 
 
 def test_the_cli_writes_nowhere_without_out(tmp_path, capsys):

@@ -6,6 +6,7 @@ The public API is the top-level ``handsim`` namespace and the modules users impo
 tools (bench, experiments, replay, input_report, users, plots, render) are not walked."""
 import importlib
 import inspect
+import math
 import os
 import pkgutil
 import re
@@ -82,7 +83,7 @@ def attribute_arrays():
     grasp_world.add_hand(handsim.HandDef())
     plate = grasp_world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05, 0.001, 0.02]), mass=0.1,
                                                  pose=[0, 0.5, -0.08, 0, 0, 0, 1]))
-    for _ in range(grasp_world.definition.grasp.frames_to_grasp):
+    for _ in range(math.ceil(grasp_world.definition.grasp.grasp_time_s * 60 - 1e-9)):  # 60 Hz frames
         grasp_world.step(1 / 60, [handsim.make_hand_frame(RIGHT, [0, 0.5, 0, 0, 0, 0, 1])])
     out = {
         "HandFrame.positions": frame.positions, "HandFrame.orientations": frame.orientations,

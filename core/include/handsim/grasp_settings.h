@@ -40,8 +40,9 @@ struct GraspSettings {
   // palm joint plus the thumb tip's to the index tip) shrank by at least closing_distance from its widest within
   // the last closing_window_s. A hand that moves or turns as a whole keeps its span, so an open hand passing
   // through a thin lid or a flat hand paddling through a box does not grasp it. Two hands squeezing one body
-  // close by their palms approaching each other instead. Value to use: 1.5 cm, half of the ~3 cm an opening
-  // pinch's thumb-index gap travels, several times what a few mm of tracker jitter moves five tips.
+  // close by their palms approaching each other instead (and combine only with this on). Value to use:
+  // 1.5 cm, half of the ~3 cm an opening pinch's thumb-index gap travels, several times what a few mm of
+  // tracker jitter moves five tips.
   double closing_distance = 0;
   // 0.5 s: a reach-and-grasp closes the hand within a few tenths of a second.
   double closing_window_s = 0.5;
