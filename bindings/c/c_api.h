@@ -20,8 +20,7 @@
 struct handsim_world {
   static constexpr uint64_t kMagic = 0x68616e6473696d31ull;  // "handsim1"
   uint64_t magic = kMagic;
-  handsim::World world;
-  std::vector<handsim::HandFrame> frames;  // handsim_step's scratch, reused so a step does not allocate
+  handsim::World world;  // thread-safe on its own (World's mutex)
 
   explicit handsim_world(const handsim::WorldDef& def) : world(def) {}
 };

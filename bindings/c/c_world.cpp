@@ -76,10 +76,12 @@ HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const
     if (size_t(hand_count) > live)
       validate::fail("hands", "got " + std::to_string(hand_count) + " frames but the world has " +
                                   std::to_string(live) + " hands");
-    w.frames.resize(size_t(hand_count));
+    // Per calling thread, not per world: two threads stepping one world must not share the scratch.
+    thread_local std::vector<HandFrame> frames;
+    frames.resize(size_t(hand_count));
     for (int32_t k = 0; k < hand_count; ++k)
-      capi::to_cpp(hands[k], "hands[" + std::to_string(k) + "]", w.frames[size_t(k)]);
-    w.world.step(dt, w.frames);
+      capi::to_cpp(hands[k], "hands[" + std::to_string(k) + "]", frames[size_t(k)]);
+    w.world.step(dt, frames);
   });
 }
 

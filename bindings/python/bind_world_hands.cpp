@@ -114,12 +114,12 @@ void bind_world_methods(py::module_& m) {
       .def("hand_render_vertices",
            [](World& w, py::handle hand) {
              const HandId id = to_hand_id(hand);
-             const Eigen::Matrix3Xd* vertices;
+             Eigen::Matrix3Xd vertices;
              {
                py::gil_scoped_release release;
-               vertices = &w.hand_render_vertices(id);
+               vertices = w.hand_render_vertices(id);
              }
-             return from_columns(*vertices);
+             return from_columns(vertices);
            },
            py::arg("hand"), "(V, 3) render vertices (model order), skinned on demand, with the local deformation.")
       .def("body_grasp", [](const World& w, py::handle body) { return w.body_grasp(cast_arg<BodyId>(body, "body")); },

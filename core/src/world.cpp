@@ -5,6 +5,7 @@
 #include "world_impl.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -14,19 +15,10 @@
 namespace handsim {
 namespace {
 
-// Generations carry a per-world salt in their top 12 bits, so an id from another world is rejected (with
-// probability 4095/4096) instead of silently naming a body here; the low 20 bits count reuses of a slot.
-constexpr uint32_t kGenerationBits = 20;
-constexpr uint32_t kGenerationMask = (1u << kGenerationBits) - 1;
-
-uint32_t world_salt(const void* impl) {
-  uint64_t x = reinterpret_cast<uintptr_t>(impl);
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdull;
-  x ^= x >> 33;
-  return uint32_t(x % 4095) + 1;
-}
-
+// Every generation in the process comes from one counter, so a (slot, generation) pair names at most one
+// object of one world: an id from another world, live or destroyed, or from an earlier tenant of the slot
+// is refused until 2^32 - 1 objects have been created in the process (see docs/design.md "Ids").
+std::atomic<uint32_t> g_generation{0};
 
 bool same_hand_def(const HandDef& a, const HandDef& b) {
   // every field of HandDef (a field added there must be added here)
@@ -93,17 +85,13 @@ BodyDef validated(const BodyDef& in) {
 
 }  // namespace
 
-uint32_t next_generation(uint32_t generation) {
-  uint32_t count = (generation & kGenerationMask) + 1;
-  if (count > kGenerationMask) count = 1;  // wrap-around; 0 would make the null id
-  return (generation & ~kGenerationMask) | count;
+uint32_t fresh_generation() {
+  uint32_t g = g_generation.fetch_add(1, std::memory_order_relaxed) + 1;
+  while (g == 0) g = g_generation.fetch_add(1, std::memory_order_relaxed) + 1;  // 0 is the null id
+  return g;
 }
 
-uint32_t first_generation(uint32_t salt) { return (salt << kGenerationBits) | 1; }
-
-World::Impl::Impl(const WorldDef& d)
-    : def(d), backend(std::make_unique<BulletBackend>(d)), salt(world_salt(this)) {}
-
+World::Impl::Impl(const WorldDef& d) : def(d), backend(std::make_unique<BulletBackend>(d)) {}
 
 Body& World::Impl::body(BodyId id, const char* argument) { return checked_slot(bodies, id, argument); }
 const Body& World::Impl::body(BodyId id, const char* argument) const {
@@ -117,20 +105,36 @@ const HandSlot& World::Impl::hand(HandId id, const char* argument) const {
 World::World(const WorldDef& def) {
   validate_world_def(def);
   impl_ = std::make_unique<Impl>(def);
+  mutex_ = std::make_unique<std::mutex>();
 }
 World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
 
-const WorldDef& World::def() const { return impl_->def; }
+WorldDef World::def() const {
+  const auto held = lock();
+  return impl_->def;
+}
 
-void World::reset() { impl_ = std::make_unique<Impl>(impl_->def); }
+void World::reset() {
+  const auto held = lock();
+  Impl& old = *impl_;
+  // End every grasp and contact first, so a caller who follows events() sees each one close.
+  for (const auto& [key, pair] : old.pairs) old.end_pair(key.first, key.second, EventReason::BodyRemoved);
+  // They stay listed through the next step, as remove_body's do; the last step's own events stay until then too.
+  std::vector<Event> events = std::move(old.events);
+  const size_t step_events = old.step_events;
+  impl_ = std::make_unique<Impl>(old.def);
+  impl_->events = std::move(events);
+  impl_->step_events = step_events;
+}
 
 BodyId World::add_body(const BodyDef& in) {
+  const auto held = lock();
   BodyDef def = validated(in);
   PreparedShape prepared = prepare_shape(def.shape, "body.shape");
   Impl& w = *impl_;
-  const uint32_t index = allocate_slot(w.bodies, w.free_body_slots, w.salt);
+  const uint32_t index = allocate_slot(w.bodies, w.free_body_slots);
   Body& b = w.bodies[index];
   b.alive = true;
   b.shape = def.shape;
@@ -149,6 +153,7 @@ BodyId World::add_body(const BodyDef& in) {
 }
 
 void World::remove_body(BodyId id) {
+  const auto held = lock();
   Impl& w = *impl_;
   Body& b = w.body(id);
   for (const Joint& j : w.joints)
@@ -172,46 +177,69 @@ void World::remove_body(BodyId id) {
 }
 
 bool World::contains(BodyId id) const {
+  const auto held = lock();
   return !id.is_null() && id.index < impl_->bodies.size() &&
          impl_->bodies[id.index].alive && impl_->bodies[id.index].generation == id.generation;
 }
 
 bool World::contains(HandId id) const {
+  const auto held = lock();
   return !id.is_null() && id.index < impl_->hands.size() && impl_->hands[id.index].alive &&
          impl_->hands[id.index].generation == id.generation;
 }
 
 std::vector<BodyId> World::bodies() const {
+  const auto held = lock();
   std::vector<BodyId> out;
   for (uint32_t i = 0; i < impl_->bodies.size(); ++i)
     if (impl_->bodies[i].alive) out.push_back({i, impl_->bodies[i].generation});
   return out;
 }
 
-const ShapeDef& World::body_shape(BodyId id) const { return impl_->body(id).shape; }
-double World::body_mass(BodyId id) const { return impl_->body(id).mass; }
-BodyMotion World::body_motion(BodyId id) const { return impl_->body(id).motion; }
-GraspInfo World::body_grasp(BodyId id) const { return impl_->body(id).grasp; }
+ShapeDef World::body_shape(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).shape;
+}
+double World::body_mass(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).mass;
+}
+BodyMotion World::body_motion(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).motion;
+}
+GraspInfo World::body_grasp(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).grasp;
+}
 
 int World::body_contact_count(BodyId body, HandId hand) const {
+  const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
   auto it = impl_->pairs.find({hand.index, body.index});
   return it == impl_->pairs.end() ? 0 : int(it->second.contacts.size());
 }
 
-const std::vector<ParticleContact>& World::body_contacts(BodyId body, HandId hand) const {
-  static const std::vector<ParticleContact> kNone;
+std::vector<ParticleContact> World::body_contacts(BodyId body, HandId hand) const {
+  const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
   auto it = impl_->pairs.find({hand.index, body.index});
-  return it == impl_->pairs.end() ? kNone : it->second.contacts;
+  return it == impl_->pairs.end() ? std::vector<ParticleContact>() : it->second.contacts;
 }
 
-const std::vector<Event>& World::events() const { return impl_->events; }
-const std::vector<StageReport>& World::stage_reports() const { return impl_->reports; }
+std::vector<Event> World::events() const {
+  const auto held = lock();
+  return impl_->events;
+}
+std::vector<StageReport> World::stage_reports() const {
+  const auto held = lock();
+  return impl_->reports;
+}
 
 std::string World::stage_summary() const {
+  const auto held = lock();
   std::string out;
   for (const StageReport& r : impl_->reports) {
     char line[96];
@@ -224,15 +252,22 @@ std::string World::stage_summary() const {
 
 // --- hands ---
 
-HandId World::add_hand(const HandDef& def) { return impl_->add_hand(def, shared_hand_model(def)); }
+// The model is built (or found shared) before the lock: it is the expensive part and touches nothing of the
+// world's.
+HandId World::add_hand(const HandDef& def) {
+  auto model = shared_hand_model(def);
+  const auto held = lock();
+  return impl_->add_hand(def, std::move(model));
+}
 
 HandId World::add_hand(const HandDef& def, const SkinnedMesh& mesh, const HandFrame& bind) {
   auto model = std::make_shared<const HandModel>(build_hand_model(def, mesh, bind));
+  const auto held = lock();
   return impl_->add_hand(def, std::move(model));
 }
 
 HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel> model) {
-  const uint32_t index = allocate_slot(hands, free_hand_slots, salt);
+  const uint32_t index = allocate_slot(hands, free_hand_slots);
   HandSlot& h = hands[index];
   h.alive = true;
   h.def = def;
@@ -247,6 +282,7 @@ HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel
 }
 
 void World::remove_hand(HandId id) {
+  const auto held = lock();
   Impl& w = *impl_;
   w.hand(id);
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
@@ -262,34 +298,56 @@ void World::remove_hand(HandId id) {
 }
 
 std::vector<HandId> World::hands() const {
+  const auto held = lock();
   std::vector<HandId> out;
   for (uint32_t i = 0; i < impl_->hands.size(); ++i)
     if (impl_->hands[i].alive) out.push_back(impl_->hand_id(i));
   return out;
 }
 
-const HandModel& World::hand_model(HandId id) const { return *impl_->hand(id).model; }
-bool World::hand_tracked(HandId id) const { return impl_->hand(id).state.tracked; }
-Pose World::hand_palm_pose(HandId id) const { return impl_->hand(id).palm; }
+const HandModel& World::hand_model(HandId id) const {
+  const auto held = lock();
+  return *impl_->hand(id).model;
+}
+bool World::hand_tracked(HandId id) const {
+  const auto held = lock();
+  return impl_->hand(id).state.tracked;
+}
+Pose World::hand_palm_pose(HandId id) const {
+  const auto held = lock();
+  return impl_->hand(id).palm;
+}
 
 // Logically const: a hand far from every body skipped skinning its particles in the step, and reading them
 // here fills that cache (the pimpl pointer lets a const accessor update it).
-const Eigen::Matrix3Xd& World::hand_particles(HandId id, bool deformed) const {
+Eigen::Matrix3Xd World::hand_particles(HandId id, bool deformed) const {
+  const auto held = lock();
   HandSlot& h = impl_->hand(id);
   impl_->refresh_particles(h, deformed);
   return deformed ? h.state.deformed_positions : h.state.tracked_positions;
 }
 
-const Eigen::Matrix3Xd& World::hand_render_vertices(HandId id) {
+Eigen::Matrix3Xd World::hand_render_vertices(HandId id) {
+  const auto held = lock();
   HandSlot& h = impl_->hand(id);
   if (h.render_dirty) impl_->skin_render_mesh(h);
   return h.render;
 }
-Pose World::body_pose(BodyId id) const { return impl_->body(id).pose; }
-Vec3 World::body_linear_velocity(BodyId id) const { return impl_->body(id).linear; }
-Vec3 World::body_angular_velocity(BodyId id) const { return impl_->body(id).angular; }
+Pose World::body_pose(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).pose;
+}
+Vec3 World::body_linear_velocity(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).linear;
+}
+Vec3 World::body_angular_velocity(BodyId id) const {
+  const auto held = lock();
+  return impl_->body(id).angular;
+}
 
 void World::set_body_pose(BodyId id, const Pose& pose) {
+  const auto held = lock();
   Body& b = impl_->body(id);
   Pose p = validate::body_pose(pose, "pose");
   if (b.jointed())
@@ -305,6 +363,7 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
 }
 
 void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular) {
+  const auto held = lock();
   Body& b = impl_->body(id);
   validate::velocity(linear, "linear");
   validate::velocity(angular, "angular");
@@ -317,16 +376,20 @@ void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular
   impl_->backend->write(b.backend, b.pose, linear, angular);
 }
 
-void World::step(double dt) { step(dt, {}); }
+void World::step(double dt) { step(dt, {}); }  // locks there
 
-double World::time() const { return impl_->time; }
+double World::time() const {
+  const auto held = lock();
+  return impl_->time;
+}
 
 uint64_t World::state_hash() const {
+  const auto held = lock();
   StateHasher hasher;
   hasher.add(impl_->time);
   for (uint32_t i = 0; i < impl_->bodies.size(); ++i) {
     const Body& b = impl_->bodies[i];
-    // Generations are left out: they carry the world's address-derived salt, not state.
+    // Generations are left out: they come from a process-wide counter, not from this world's state.
     hasher.add(uint64_t(i) << 1 | uint64_t(b.alive));
     if (!b.alive) continue;
     hasher.add(b.pose);

@@ -165,7 +165,6 @@ struct World::Impl {
   uint64_t idle_substeps = 0;      // substeps in which Bullet was skipped (nothing awake)
   double time = 0;
   double accumulator = 0;
-  const uint32_t salt;
 
   explicit Impl(const WorldDef& d);
 
@@ -253,8 +252,8 @@ struct World::Impl {
   void read_dynamic_bodies();
 };
 
-uint32_t next_generation(uint32_t generation);
-uint32_t first_generation(uint32_t salt);
+// A generation no other slot of any world in this process has had (world.cpp).
+uint32_t fresh_generation();
 
 // Slot tables with generations, shared by bodies, joints and hands.
 inline std::string stale_message(uint32_t index, uint32_t generation) {
@@ -272,20 +271,23 @@ Slot& checked_slot(std::vector<Slot>& slots, IdT id, const char* argument) {
 
 // Takes a free slot or appends one; returns its index.
 template <class Slot>
-uint32_t allocate_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t salt) {
+uint32_t allocate_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots) {
+  uint32_t index;
   if (!free_slots.empty()) {
-    uint32_t index = free_slots.back();
+    index = free_slots.back();
     free_slots.pop_back();
-    return index;
+  } else {
+    slots.emplace_back();
+    index = uint32_t(slots.size() - 1);
   }
-  slots.emplace_back();
-  slots.back().generation = first_generation(salt);
-  return uint32_t(slots.size() - 1);
+  slots[index].generation = fresh_generation();
+  return index;
 }
 
 template <class Slot>
 void release_slot(std::vector<Slot>& slots, std::vector<uint32_t>& free_slots, uint32_t index) {
-  const uint32_t generation = next_generation(slots[index].generation);
+  // The old generation stays until the slot is taken again, so the old id stays stale in the meantime.
+  const uint32_t generation = slots[index].generation;
   slots[index] = Slot();
   slots[index].generation = generation;
   free_slots.push_back(index);

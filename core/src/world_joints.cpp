@@ -175,7 +175,7 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
   read_coordinate(j, parent_pose(j), c.pose);
 
   // Everything validated: from here on the world changes.
-  const uint32_t index = allocate_slot(joints, free_joint_slots, salt);
+  const uint32_t index = allocate_slot(joints, free_joint_slots);
   j.generation = joints[index].generation;
   j.alive = true;
   const int parent_backend = j.parent == kWorldParent ? -1 : bodies[j.parent].backend;
@@ -416,26 +416,31 @@ Joint joint_from(JointType type, const Def& d, Frame Joint::*slot, Frame frame) 
 }  // namespace
 
 JointId World::add_joint(const HingeDef& d) {
+  const auto held = lock();
   Joint j = joint_from(JointType::Hinge, d, &Joint::hinge, make_hinge_frame(d, "hinge"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "hinge");
 }
 
 JointId World::add_joint(const SliderDef& d) {
+  const auto held = lock();
   Joint j = joint_from(JointType::Slider, d, &Joint::slider, make_slider_frame(d, "slider"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "slider");
 }
 
 JointId World::add_joint(const BallDef& d) {
+  const auto held = lock();
   Joint j = joint_from(JointType::Ball, d, &Joint::ball, make_ball_frame(d, "ball"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "ball");
 }
 
 JointId World::add_joint(const FixedDef& d) {
+  const auto held = lock();
   Joint j = joint_from(JointType::Fixed, d, &Joint::fixed, make_fixed_frame(d, "fixed"));
   return impl_->add_joint(std::move(j), d.parent, d.child, "fixed");
 }
 
 void World::remove_joint(JointId id) {
+  const auto held = lock();
   Impl& w = *impl_;
   Joint& j = w.joint(id);
   Body& c = w.bodies[j.child];
@@ -456,11 +461,13 @@ void World::remove_joint(JointId id) {
 }
 
 bool World::contains(JointId id) const {
+  const auto held = lock();
   return !id.is_null() && id.index < impl_->joints.size() && impl_->joints[id.index].alive &&
          impl_->joints[id.index].generation == id.generation;
 }
 
 std::vector<JointId> World::joints() const {
+  const auto held = lock();
   std::vector<JointId> out;
   for (uint32_t k = 0; k < impl_->joints.size(); ++k)
     if (impl_->joints[k].alive) out.push_back(impl_->joint_id(k));
@@ -468,6 +475,7 @@ std::vector<JointId> World::joints() const {
 }
 
 JointState World::joint_state(JointId id) const {
+  const auto held = lock();
   const Impl& w = *impl_;
   const Joint& j = w.joint(id);
   JointState s;
@@ -529,6 +537,7 @@ JointState World::joint_state(JointId id) const {
 }
 
 void World::set_joint_value(JointId id, double value) {
+  const auto held = lock();
   Impl& w = *impl_;
   Joint& j = w.joint(id);
   validate::finite(value, "value");

@@ -18,6 +18,7 @@
 namespace handsim {
 
 void World::step(double dt, const std::vector<HandFrame>& frames) {
+  const auto held = lock();
   Impl& w = *impl_;
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
   w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(std::min(w.step_events, w.events.size())));

@@ -139,7 +139,7 @@ struct Scene {
 
   void step(const std::vector<HandFrame>& frames) {
     world.step(kDt, frames);
-    log.insert(log.end(), world.events().begin(), world.events().end());
+    for (const Event& e : world.events()) log.push_back(e);
   }
   // Comes down from 10 cm above with the thumb open.
   void approach() {
@@ -587,12 +587,12 @@ TEST(Step, ContactEventsNameTheRightHandAndBody) {
   for (int i = 0; i < 40; ++i) {
     const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);  // the tip joint down to 1 cm above, back up
     world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), y), press(Handedness::Left, Vec3(-0.5, 0, 0), 0.3)});
-    log.insert(log.end(), world.events().begin(), world.events().end());
+    for (const Event& e : world.events()) log.push_back(e);
   }
   for (int i = 0; i < 40; ++i) {
     const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);
     world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), 0.3), press(Handedness::Left, Vec3(0, 0, 0), y)});
-    log.insert(log.end(), world.events().begin(), world.events().end());
+    for (const Event& e : world.events()) log.push_back(e);
   }
   ASSERT_EQ(log.size(), 4u);
   EXPECT_EQ(log[0].type, EventType::ContactBegin);
@@ -684,6 +684,32 @@ TEST(Step, RemovingAHeldBodyEndsItsGraspAndContacts) {
   EXPECT_FALSE(s.world.body_grasp(next).grasped);
   EXPECT_EQ(s.world.body_motion(next), BodyMotion::Dynamic);
   EXPECT_THROW(s.world.body_contact_count(old, s.hand), Error);
+}
+
+// Issue 22 item 6: reset() mid-grasp ends what it implies, like remove_body: a GraspEnd (BodyRemoved: reset
+// removes every body) and a ContactEnd naming the old hand and body, listed until the next step; nothing after.
+TEST(Step, ResetMidGraspEndsTheGraspAndContacts) {
+  Scene s;
+  s.grasp();
+  const std::vector<Event> before = s.world.events();
+  s.world.reset();
+  const std::vector<Event> ev = s.world.events();
+  ASSERT_EQ(ev.size(), before.size() + 2);
+  const Event& end = ev[before.size()];
+  EXPECT_EQ(end.type, EventType::GraspEnd);
+  EXPECT_EQ(end.reason, EventReason::BodyRemoved);
+  EXPECT_EQ(ev.back().type, EventType::ContactEnd);
+  for (size_t i = before.size(); i < ev.size(); ++i) EXPECT_TRUE(ev[i].hand == s.hand && ev[i].body == s.box);
+  EXPECT_TRUE(s.world.bodies().empty());
+  EXPECT_TRUE(s.world.hands().empty());
+  EXPECT_FALSE(s.world.contains(s.box));
+  s.world.step(kDt);
+  ASSERT_EQ(s.world.events().size(), 2u);  // the reset's, once more for a caller reading after each step
+  s.world.step(kDt);
+  EXPECT_TRUE(s.world.events().empty());
+  // A reset with nothing touching reports nothing.
+  s.world.reset();
+  EXPECT_TRUE(s.world.events().empty());
 }
 
 // Removing the holding hand: the cube is let go at rest (HandRemoved) and falls; the world has no hand left.

@@ -9,6 +9,7 @@
 #include "handsim/types.h"
 
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace handsim {
@@ -117,6 +118,10 @@ struct StageReport {
   std::string why;
 };
 
+// Thread safety: every member function may be called from any thread. Calls on one world are serialised by
+// the world's mutex (the second caller waits; see docs/design.md "Threads"); different worlds share nothing
+// and run in parallel. Results are returned by value, so nothing a caller holds is changed by another
+// thread's call — except hand_model(), whose reference stays valid until that hand is removed or reset().
 class World {
  public:
   explicit World(const WorldDef& def = {});
@@ -126,8 +131,9 @@ class World {
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  const WorldDef& def() const;
-  // Removes every body and resets time; the WorldDef is kept.
+  WorldDef def() const;
+  // Removes every body, joint and hand and resets time; the WorldDef is kept. Every grasp and contact it ends
+  // is reported (GraspEnd / ContactEnd with reason BodyRemoved) in events() until the next step.
   void reset();
 
   // --- bodies ---
@@ -135,7 +141,7 @@ class World {
   void remove_body(BodyId id);  // Status::InvalidState while a joint uses it
   bool contains(BodyId id) const;
   std::vector<BodyId> bodies() const;
-  const ShapeDef& body_shape(BodyId id) const;
+  ShapeDef body_shape(BodyId id) const;
   double body_mass(BodyId id) const;
   BodyMotion body_motion(BodyId id) const;
 
@@ -174,17 +180,17 @@ class World {
   bool hand_tracked(HandId id) const;
   Pose hand_palm_pose(HandId id) const;  // of the last tracked frame
   // 3 x N particle centres: where the tracked hand is, and where it is drawn after the local deformation.
-  const Eigen::Matrix3Xd& hand_particles(HandId id, bool deformed) const;
+  Eigen::Matrix3Xd hand_particles(HandId id, bool deformed) const;
   // All render vertices, skinned on demand (only when someone asks), with the local deformation.
-  const Eigen::Matrix3Xd& hand_render_vertices(HandId id);
+  Eigen::Matrix3Xd hand_render_vertices(HandId id);
 
   // --- grasps, contacts, events ---
   GraspInfo body_grasp(BodyId id) const;
   int body_contact_count(BodyId body, HandId hand) const;  // touching particles in the last step
   // Those contacts themselves (particle, surface point, normal, depth), sorted by particle: what a viewer
   // colours and what a debugger inspects, without re-deriving the narrow phase outside the core.
-  const std::vector<ParticleContact>& body_contacts(BodyId body, HandId hand) const;
-  const std::vector<Event>& events() const;
+  std::vector<ParticleContact> body_contacts(BodyId body, HandId hand) const;
+  std::vector<Event> events() const;
 
   // --- stepping ---
   void step(double dt);
@@ -192,7 +198,7 @@ class World {
   // rest are untracked this frame). Everything is validated before anything changes.
   void step(double dt, const std::vector<HandFrame>& hands);
   double time() const;
-  const std::vector<StageReport>& stage_reports() const;
+  std::vector<StageReport> stage_reports() const;
   std::string stage_summary() const;  // readable: which stages ran, what they cost, why
 
   // A stable 64-bit FNV-1a hash of every body's state (bits of the doubles), identical across runs and
@@ -202,6 +208,9 @@ class World {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  // Held by every member function for its whole call (a pointer so that World stays movable).
+  std::unique_ptr<std::mutex> mutex_;
+  std::unique_lock<std::mutex> lock() const { return std::unique_lock<std::mutex>(*mutex_); }
 };
 
 }  // namespace handsim
