@@ -8,8 +8,10 @@
 // Runtime dispatch of the skinning loop: GCC compiles it for AVX2 and for the baseline and picks one at load
 // time, so the portable binary uses 4-wide vectors where the CPU has them. Both clones do the same IEEE
 // multiplies and adds (FMA is not enabled and contraction is off), so they give the same bits.
+// Not under ThreadSanitizer: the clones' ifunc resolver runs during relocation, before TSan's runtime is up,
+// and its instrumented code crashes the program at load (seen with GCC 12).
 #if defined(HANDSIM_SIMD_DISPATCH) && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
-    defined(__linux__)
+    defined(__linux__) && !defined(__SANITIZE_THREAD__)
 #define HANDSIM_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
 #define HANDSIM_INLINE inline __attribute__((always_inline))
 #else
