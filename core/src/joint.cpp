@@ -7,7 +7,6 @@
 namespace handsim {
 namespace {
 
-constexpr double kTwoPi = 2.0 * M_PI;
 // R0 given by the user must carry axis_child onto axis_parent to this angle (radians).
 constexpr double kRestAxisTolerance = 1e-6;
 
@@ -26,12 +25,17 @@ void check_solver(JointSolver s, const std::string& arg) {
     validate::fail(arg + ".solver", "unknown joint solver " + std::to_string(int(s)));
 }
 
-// Limits may be infinite (no limit on that side) but never NaN, and must leave a non-empty range.
-void check_limits(double lower, double upper, const std::string& arg) {
-  if (std::isnan(lower) || lower == kUnlimited)
-    validate::fail(arg + ".lower", "must be finite or -inf, got " + validate::fmt(lower));
-  if (std::isnan(upper) || upper == -kUnlimited)
-    validate::fail(arg + ".upper", "must be finite or +inf, got " + validate::fmt(upper));
+// Limits may be infinite (no limit on that side) but never NaN, and must leave a non-empty range. A finite
+// limit is at most `bound` from 0 (1e6 rad, 1e7 m): there the coordinate still resolves 1.2e-10 rad resp.
+// 1.9e-9 m (one ulp); far beyond, a stop would no longer be where it was asked for (1e308 was accepted).
+void check_limits(double lower, double upper, const std::string& arg, double bound, const char* unit) {
+  const std::string range = std::string(" (") + unit + "), got ";
+  if (std::isnan(lower) || lower == kUnlimited || (std::isfinite(lower) && std::abs(lower) > bound))
+    validate::fail(arg + ".lower", "must be -inf or finite within +-" + validate::fmt(bound) + range +
+                                       validate::fmt(lower));
+  if (std::isnan(upper) || upper == -kUnlimited || (std::isfinite(upper) && std::abs(upper) > bound))
+    validate::fail(arg + ".upper", "must be +inf or finite within +-" + validate::fmt(bound) + range +
+                                       validate::fmt(upper));
   if (lower > upper)
     validate::fail(arg + ".lower", "must be <= upper, got " + validate::fmt(lower) + " > " +
                                        validate::fmt(upper));
@@ -41,14 +45,13 @@ void check_limits(double lower, double upper, const std::string& arg) {
 
 void validate_joint(const HingeDef& d, const std::string& arg) {
   check_bodies(d.parent, d.child, arg);
-  validate::finite(d.pivot_parent, arg + ".pivot_parent");
-  validate::finite(d.pivot_child, arg + ".pivot_child");
+  validate::point(d.pivot_parent, arg + ".pivot_parent");
+  validate::point(d.pivot_child, arg + ".pivot_child");
   Vec3 ap = validate::unit_vector(d.axis_parent, arg + ".axis_parent");
   Vec3 ac = validate::unit_vector(d.axis_child, arg + ".axis_child");
-  check_limits(d.lower, d.upper, arg);
-  // Both finite: a span above one turn would give one pose two angles inside the limits.
-  if (std::isfinite(d.lower) && std::isfinite(d.upper) && d.upper - d.lower > kTwoPi * (1 + 1e-12))
-    validate::fail(arg + ".upper", "upper - lower must be <= 2*pi, got " + validate::fmt(d.upper - d.lower));
+  // Any span: the angle is unwrapped continuously (it counts turns), so a range wider than 2 pi is a joint
+  // that turns more than once between its stops.
+  check_limits(d.lower, d.upper, arg, validate::kMaxJointAngle, "rad");
   validate::non_negative(d.damping, arg + ".damping");
   if (d.rest_orientation) {
     Quat r0 = validate::unit_quat(*d.rest_orientation, arg + ".rest_orientation");
@@ -64,10 +67,10 @@ void validate_joint(const HingeDef& d, const std::string& arg) {
 
 void validate_joint(const SliderDef& d, const std::string& arg) {
   check_bodies(d.parent, d.child, arg);
-  validate::finite(d.anchor_parent, arg + ".anchor_parent");
-  validate::finite(d.anchor_child, arg + ".anchor_child");
+  validate::point(d.anchor_parent, arg + ".anchor_parent");
+  validate::point(d.anchor_child, arg + ".anchor_child");
   validate::unit_vector(d.axis, arg + ".axis");
-  check_limits(d.lower, d.upper, arg);
+  check_limits(d.lower, d.upper, arg, validate::kMaxCoordinate, "m");
   validate::non_negative(d.damping, arg + ".damping");
   validate::unit_quat(d.rest_orientation, arg + ".rest_orientation");
   check_solver(d.solver, arg);
@@ -76,8 +79,8 @@ void validate_joint(const SliderDef& d, const std::string& arg) {
 
 void validate_joint(const BallDef& d, const std::string& arg) {
   check_bodies(d.parent, d.child, arg);
-  validate::finite(d.pivot_parent, arg + ".pivot_parent");
-  validate::finite(d.pivot_child, arg + ".pivot_child");
+  validate::point(d.pivot_parent, arg + ".pivot_parent");
+  validate::point(d.pivot_child, arg + ".pivot_child");
   validate::unit_quat(d.rest_orientation, arg + ".rest_orientation");
   if (d.cone_half_angle) {
     validate::unit_vector(d.cone_axis, arg + ".cone_axis");
@@ -94,7 +97,7 @@ void validate_joint(const BallDef& d, const std::string& arg) {
 
 void validate_joint(const FixedDef& d, const std::string& arg) {
   check_bodies(d.parent, d.child, arg);
-  validate::pose(d.relative, arg + ".relative");
+  validate::body_pose(d.relative, arg + ".relative");
   check_model(d.model, arg);
 }
 
@@ -102,7 +105,7 @@ HingeDef hinge_from_world(BodyId parent, const Pose& parent_pose, BodyId child, 
                           const Vec3& pivot_world, const Vec3& axis_world) {
   Pose p = validate::pose(parent_pose, "parent_pose");
   Pose c = validate::pose(child_pose, "child_pose");
-  validate::finite(pivot_world, "pivot_world");
+  validate::point(pivot_world, "pivot_world");
   Vec3 axis = validate::unit_vector(axis_world, "axis_world");
   HingeDef d;
   d.parent = parent;

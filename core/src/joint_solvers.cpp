@@ -29,11 +29,19 @@ Mat3 skew(const Vec3& v) {
 
 Mat3 rotation(const Vec3& axis, double angle) { return Eigen::AngleAxisd(angle, axis).toRotationMatrix(); }
 
-// The turn theta0 + 2 pi k nearest `previous` inside [lower, upper]; when no turn is inside, the limit where
+// continuous_turns (JointSolveOptions::continuous): see below. Otherwise, the global minimum in the limits:
+// the turn theta0 + 2 pi k nearest `previous` inside [lower, upper]; when no turn is inside, the limit where
 // the cost A - rho cos(theta - theta0) is smaller (ties: the limit nearer `previous`). Distance to previous
 // is convex in k, so clamping the unconstrained best k into the admissible range gives the admissible best.
-double pick_turn(double theta0, double previous, double lower, double upper, bool& at_limit) {
+double pick_turn(double theta0, double previous, double lower, double upper, bool continuous_turns,
+                 bool& at_limit) {
   double k = std::round((previous - theta0) / kTwoPi);
+  if (continuous_turns) {
+    // The joint moves from `previous`: the shorter way round to the target, held at the stop on its side.
+    const double theta = theta0 + kTwoPi * k;
+    at_limit = theta < lower || theta > upper;
+    return std::clamp(theta, lower, upper);
+  }
   double k_min = std::ceil((lower - theta0) / kTwoPi);   // -inf when unlimited
   double k_max = std::floor((upper - theta0) / kTwoPi);  // +inf when unlimited
   at_limit = k_min > k_max;
@@ -194,9 +202,9 @@ HingeFrame make_hinge_frame(const HingeDef& d, const std::string& arg) {
   HingeFrame f;
   f.pivot_parent = d.pivot_parent;
   f.pivot_child = d.pivot_child;
-  f.axis_parent = d.axis_parent.normalized();
+  f.axis_parent = d.axis_parent.stableNormalized();  // stable: (1e308, 0, 0) would overflow to 0
   f.rest = d.rest_orientation ? d.rest_orientation->normalized()
-                              : Quat::FromTwoVectors(d.axis_child.normalized(), f.axis_parent);
+                              : Quat::FromTwoVectors(d.axis_child.stableNormalized(), f.axis_parent);
   f.lower = d.lower;
   f.upper = d.upper;
   return f;
@@ -204,7 +212,7 @@ HingeFrame make_hinge_frame(const HingeDef& d, const std::string& arg) {
 
 SliderFrame make_slider_frame(const SliderDef& d, const std::string& arg) {
   validate_joint(d, arg);
-  return {d.anchor_parent, d.axis.normalized(), d.anchor_child, d.rest_orientation.normalized(), d.lower,
+  return {d.anchor_parent, d.axis.stableNormalized(), d.anchor_child, d.rest_orientation.normalized(), d.lower,
           d.upper};
 }
 
@@ -215,7 +223,7 @@ BallFrame make_ball_frame(const BallDef& d, const std::string& arg) {
   f.pivot_child = d.pivot_child;
   f.rest = d.rest_orientation.normalized();
   if (d.cone_half_angle) {
-    f.cone_axis = d.cone_axis.normalized();
+    f.cone_axis = d.cone_axis.stableNormalized();
     f.cone_half_angle = *d.cone_half_angle;
   }
   return f;
@@ -278,7 +286,7 @@ JointSolveResult solve_hinge_exact(const HingeFrame& f, const VertexMoments& m, 
     r.termination = JointTermination::Degenerate;
   } else {
     bool at_limit = false;
-    r.value = pick_turn(std::atan2(h.beta, h.alpha), previous, f.lower, f.upper, at_limit);
+    r.value = pick_turn(std::atan2(h.beta, h.alpha), previous, f.lower, f.upper, o.continuous, at_limit);
     r.termination = at_limit ? JointTermination::AtLimit : JointTermination::Converged;
   }
   r.cost = hinge_cost(f, t, m, r.value);

@@ -91,6 +91,11 @@ struct JointSolveOptions {
   // N=1182 0.95 vs 2.1 ms, N=39225 35 vs 95 ms): building and evaluating N blocks costs more than the
   // solve itself.
   bool ceres_single_block = true;
+  // Hinge, Exact: false gives eq. 4's global minimum inside the limits (the reference the LM modes are
+  // compared with); true gives the minimum the joint reaches by moving from `previous` — the turn of the
+  // target nearest it, held at the stop on its side when beyond one. The world uses true: the global minimum
+  // let a lid dragged past a stop at +165 deg jump to -165 deg in one frame, through the stop (issue 22).
+  bool continuous = false;
 };
 
 struct JointSolveResult {

@@ -50,10 +50,15 @@ Pose pose(const Pose& p, const std::string& argument) {
   return {p.position, unit_quat(p.orientation, argument + ".orientation")};
 }
 
+void point(const Vec3& v, const std::string& argument) {
+  finite(v, argument);
+  if (!(v.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+    fail(argument, "must be within " + fmt(kMaxCoordinate) + " m of the origin, got " + fmt(v));
+}
+
 Pose body_pose(const Pose& p, const std::string& argument) {
   Pose out = pose(p, argument);
-  if (!(p.position.cwiseAbs().maxCoeff() <= kMaxCoordinate))
-    fail(argument + ".position", "must be within " + fmt(kMaxCoordinate) + " m of the origin, got " + fmt(p.position));
+  point(p.position, argument + ".position");
   return out;
 }
 
@@ -68,7 +73,8 @@ void velocity(const Vec3& v, const std::string& argument) {
 
 Vec3 unit_vector(const Vec3& v, const std::string& argument) {
   finite(v, argument);
-  double n = v.norm();
+  // stableNorm: the plain norm of (1e308, 0, 0) overflows to inf and the direction would become (0, 0, 0).
+  double n = v.stableNorm();
   if (!(n > 1e-12)) fail(argument, "must be a non-zero direction, got " + fmt(v));
   return v / n;
 }

@@ -18,6 +18,8 @@ constexpr double kMaxTimeStep = 60.0;  // seconds; longest frame step() accepts
 // 1e300 and returns NaN. 1e7 m leaves room for planet-scale scenes; 1e4 m/s is 30x the speed of sound.
 constexpr double kMaxCoordinate = 1e7;
 constexpr double kMaxSpeed = 1e4;
+// Hinge limits (radians): 159,155 turns either way; one ulp there is 1.2e-10 rad.
+constexpr double kMaxJointAngle = 1e6;
 
 [[noreturn]] void fail(const std::string& argument, const std::string& message,
                        Status status = Status::InvalidArgument);
@@ -33,7 +35,8 @@ void positive(const Vec3& v, const std::string& argument);  // every component f
 // Returns the normalized quaternion, or throws when it is non-finite or too far from unit length.
 Quat unit_quat(const Quat& q, const std::string& argument);
 Pose pose(const Pose& p, const std::string& argument);
-Pose body_pose(const Pose& p, const std::string& argument);  // pose() with |position| <= kMaxCoordinate
+Pose body_pose(const Pose& p, const std::string& argument);
+void point(const Vec3& v, const std::string& argument);  // finite, every |component| <= kMaxCoordinate  // pose() with |position| <= kMaxCoordinate
 void velocity(const Vec3& v, const std::string& argument);
 void at_most(double v, double limit, const std::string& argument);  // finite and <= limit  // finite, |v| <= kMaxSpeed  // finite position + unit_quat
 Vec3 unit_vector(const Vec3& v, const std::string& argument);  // finite, non-zero; returned normalized

@@ -105,6 +105,7 @@ JointSolver World::Impl::solver_of(const Joint& j) const {
 JointSolveOptions World::Impl::joint_options() const {
   JointSolveOptions o;
   o.max_iterations = def.joint_max_iterations;
+  o.continuous = true;  // a hard joint moves continuously: never through a stop (see JointSolveOptions)
   return o;
 }
 
@@ -126,11 +127,22 @@ Pose World::Impl::joint_child_pose(const Joint& j) const {
 // --- adding and removing ---
 
 namespace {
-// Which joint coordinate the current poses imply, clamped into the limits.
+constexpr double kTwoPi = 2.0 * M_PI;
+
+// The hinge angle a pose implies when the joint is made: of the turns theta + 2 pi k inside [lower, upper],
+// the one nearest 0 (limits [3 pi, 5 pi] and a child at its rest pose give 4 pi, not a jump to 3 pi);
+// with no turn inside, the nearer limit.
+double initial_hinge_angle(double theta, double lower, double upper) {
+  const double k_min = std::ceil((lower - theta) / kTwoPi), k_max = std::floor((upper - theta) / kTwoPi);
+  if (k_min > k_max) return std::clamp(theta, lower, upper);
+  return theta + kTwoPi * std::clamp(std::round(-theta / kTwoPi), k_min, k_max);
+}
+
+// Which joint coordinate the current poses imply, inside the limits.
 void read_coordinate(Joint& j, const Pose& parent, const Pose& child) {
   switch (j.type) {
     case JointType::Hinge:
-      j.value = std::clamp(hinge_angle(j.hinge, parent, child, 0.0), j.hinge.lower, j.hinge.upper);
+      j.value = initial_hinge_angle(hinge_angle(j.hinge, parent, child, 0.0), j.hinge.lower, j.hinge.upper);
       break;
     case JointType::Slider:
       j.value = std::clamp(slider_displacement(j.slider, parent, child), j.slider.lower, j.slider.upper);

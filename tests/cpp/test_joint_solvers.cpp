@@ -709,7 +709,11 @@ TEST(Validation, BadHingeNamesTheField) {
   expect_error(with([](HingeDef& d) { d.lower = 2; }), "lower");
   expect_error(with([&](HingeDef& d) { d.lower = nan; }), "lower");
   expect_error(with([&](HingeDef& d) { d.upper = nan; }), "upper");
-  expect_error(with([](HingeDef& d) { d.lower = -4, d.upper = 3; }), "upper");  // span > 2 pi
+  expect_error(with([](HingeDef& d) { d.upper = 1e308; }), "upper");  // beyond +-1e6 rad
+  expect_error(with([](HingeDef& d) { d.lower = -1e7; }), "lower");
+  expect_error(with([](HingeDef& d) { d.pivot_child = Vec3(1e308, 0, 0); }), "pivot_child");  // was NaN
+  EXPECT_NO_THROW(validate_joint(with([](HingeDef& d) { d.lower = -4, d.upper = 3; }), "joint"));  // > 2 pi
+  EXPECT_NO_THROW(validate_joint(with([](HingeDef& d) { d.axis_parent = Vec3(1e308, 0, 0); }), "joint"));
   expect_error(with([](HingeDef& d) { d.child = d.parent; }), "child");
   expect_error(with([](HingeDef& d) { d.child = {}; }), "child");
   expect_error(with([](HingeDef& d) { d.damping = -0.1; }), "damping");

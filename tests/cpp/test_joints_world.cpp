@@ -84,6 +84,78 @@ TEST(JointsWorld, FallingPendulumStopsAtItsLimitAndStaysOnTheHinge) {
   EXPECT_NEAR(lowest, -30 * kDeg, 1e-12);  // it swung down through 0 and hit the lower limit
 }
 
+// Issue 22 item 3: a lid grasped and dragged past a stop near +-pi stays at that stop. Before, limits +-165
+// deg jumped to -165 deg in one frame (rate -346 rad/s, overshoot 0) once the hand passed ~180 deg, and
+// limits [-pi, pi] jumped 179 -> -177 deg: the solver took the admissible turn nearest in cost, not the
+// one the lid reaches by moving. No gravity, no table, a static base: the lid stays wherever the hand leaves it.
+TEST(JointsWorld, HingeDraggedPastAStopNearPiStaysAtTheStop) {
+  for (const double stop : {165 * kDeg, M_PI}) {
+    WorldDef wd;
+    wd.gravity = Vec3::Zero();
+    wd.ground = false;
+    World world(wd);
+    JewelryBoxDef bd;
+    bd.table = false;
+    bd.base_mass = 0;
+    bd.lower = -stop;
+    bd.upper = stop;
+    const JewelryBox box = build_jewelry_box(world, bd);
+    world.add_hand(HandDef{});
+    double previous = 0, max_value = 0, max_jump = 0;
+    for (int i = 0; i < 330; ++i) {
+      const double angle = std::clamp((i - 10) / 300.0, 0.0, 1.0) * 200 * kDeg;  // 0 -> 200 deg in 5 s
+      world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
+                                       lid_pinch_shape())});
+      const JointState s = world.joint_state(box.hinge);
+      max_jump = std::max(max_jump, std::abs(s.value - previous));
+      max_value = std::max(max_value, s.value);
+      previous = s.value;
+      ASSERT_LE(s.value, stop + 1e-12) << "frame " << i;
+      ASSERT_EQ(s.overshoot, 0.0) << "frame " << i;
+      ASSERT_LE(s.violation, 1e-9) << "frame " << i;
+    }
+    EXPECT_NEAR(max_value, stop, 1e-9) << "the hand dragged the lid to its stop";
+    EXPECT_NEAR(previous, stop, 1e-9) << "and it stayed there";
+    EXPECT_LE(max_jump, 0.1) << "no frame moved the lid more than the hand's swing (0.012 rad a frame)";
+  }
+}
+
+// Ranges wider than 2 pi and stops far from 0: the angle counts turns. A pendulum a full turn and 1 rad out
+// swings about 2 pi, never wrapped back to 0; one whose lower stop is at 2 pi + 0.2 falls onto that stop.
+TEST(JointsWorld, HingeLimitsWiderThanTwoPiAndFarFromZeroHold) {
+  Pendulum wide(2 * M_PI + 1.0, -3 * M_PI, 3 * M_PI);
+  Pendulum far(2 * M_PI + 1.0, 2 * M_PI + 0.2, 3 * M_PI);
+  EXPECT_NEAR(wide.world.joint_state(wide.hinge).value, 2 * M_PI + 1.0, 1e-12);
+  double lowest = 1e9;
+  for (int i = 0; i < 600; ++i) {
+    wide.world.step(kDt);
+    far.world.step(kDt);
+    const JointState w = wide.world.joint_state(wide.hinge), f = far.world.joint_state(far.hinge);
+    ASSERT_GE(w.value, 2 * M_PI - 1.0 - 1e-3) << "frame " << i;
+    ASSERT_LE(w.value, 2 * M_PI + 1.0 + 1e-3) << "frame " << i;
+    ASSERT_GE(f.value, 2 * M_PI + 0.2 - 1e-12) << "frame " << i;
+    ASSERT_LE(f.overshoot, 1e-12);  // measured from the poses: rounding at 2 pi + 0.2 (8.9e-16 rad)
+    ASSERT_LE(std::max(w.violation, f.violation), 1e-12);
+    lowest = std::min(lowest, w.value);
+  }
+  EXPECT_LT(lowest, 2 * M_PI - 0.9) << "it did swing through 2 pi to the other side";
+  EXPECT_NEAR(far.world.joint_state(far.hinge).value, 2 * M_PI + 0.2, 1e-12);
+  // A joint made at a pose inside [3 pi, 5 pi] (a rest pose: 0 = 4 pi) takes 4 pi, not a jump to 3 pi.
+  World world;
+  const BodyId rod = world.add_body(box_body(Vec3(0.01, 0.2, 0.01), Vec3(0, 1, 0), 1.0));
+  HingeDef h;
+  h.child = rod;
+  h.pivot_parent = Vec3(0, 1.2, 0);
+  h.pivot_child = Vec3(0, 0.2, 0);
+  h.axis_parent = h.axis_child = Vec3::UnitZ();
+  h.lower = 3 * M_PI;
+  h.upper = 5 * M_PI;
+  const Pose before = world.body_pose(rod);
+  const JointId j = world.add_joint(h);
+  EXPECT_NEAR(world.joint_state(j).value, 4 * M_PI, 1e-12);
+  EXPECT_LE((world.body_pose(rod).position - before.position).norm(), 1e-12);
+}
+
 TEST(JointsWorld, ClosedLidRestsAndOpenLidFallsShutWithoutPassingTheLimit) {
   World world;
   JewelryBox box = build_jewelry_box(world);
@@ -317,7 +389,7 @@ TEST(JointsWorld, BadJointDefinitionsAreRejectedAndTheWorldIsUnchanged) {
   h.child = fixed_body;
   expect_error(h, "hinge.child", Status::InvalidState);
   h = good;
-  h.upper = 7;
+  h.upper = 1e308;  // beyond +-1e6 rad (any span is legal, JointsWorld.HingeLimitsWiderThanTwoPi*)
   h.lower = 0;
   expect_error(h, "hinge.upper", Status::InvalidArgument);
   h = good;

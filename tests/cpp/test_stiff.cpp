@@ -342,7 +342,7 @@ TEST(stiff, ZeroAndNegativeMassAndSize) {
   EXPECT_EQ(f.world.body_pose(f.box.base).position, base.position);
 }
 
-TEST(stiff, LowerAboveUpperLimitsAndSpanOver2Pi) {
+TEST(stiff, LowerAboveUpperAndOutOfRangeLimits) {
   Scene s;
   for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
   // A second box's definition, and a hinge between two new free bodies: both rejected before anything is added.
@@ -351,10 +351,9 @@ TEST(stiff, LowerAboveUpperLimitsAndSpanOver2Pi) {
   inverted.upper = 0.5;
   expect_rejected(s.world, [&] { build_jewelry_box(s.world, inverted); }, Status::InvalidArgument,
                   "jewelry_box.lower");
-  JewelryBoxDef wide;
-  wide.lower = -M_PI;
-  wide.upper = M_PI + 0.01;
-  expect_rejected(s.world, [&] { build_jewelry_box(s.world, wide); }, Status::InvalidArgument, "jewelry_box.upper");
+  JewelryBoxDef far;
+  far.upper = 1e308;  // a finite stop beyond 1e6 rad (issue 22: was accepted)
+  expect_rejected(s.world, [&] { build_jewelry_box(s.world, far); }, Status::InvalidArgument, "jewelry_box.upper");
   HingeDef h;
   h.parent = s.box.base;
   h.child = s.box.lid;  // (already a hard child: checked after the limits)
@@ -362,17 +361,17 @@ TEST(stiff, LowerAboveUpperLimitsAndSpanOver2Pi) {
   h.lower = 0.2;
   h.upper = -0.2;
   expect_rejected(s.world, [&] { s.world.add_joint(h); }, Status::InvalidArgument, "hinge.lower");
-  h.lower = 0;
-  h.upper = 2 * M_PI + 1e-6;
-  expect_rejected(s.world, [&] { s.world.add_joint(h); }, Status::InvalidArgument, "hinge.upper");
+  h.lower = -2e6;
+  h.upper = 0;
+  expect_rejected(s.world, [&] { s.world.add_joint(h); }, Status::InvalidArgument, "hinge.lower");
   SliderDef sl;
   sl.parent = s.box.base;
   sl.child = s.box.lid;
   sl.lower = 0.1;
   sl.upper = 0.0;
   expect_rejected(s.world, [&] { s.world.add_joint(sl); }, Status::InvalidArgument, "slider.lower");
-  // The boundaries are legal: lower == upper locks the lid (a hand cannot open it), a span of exactly 2 pi is
-  // one full turn and the hand drags the lid all the way over (to 180 deg).
+  // The boundaries are legal: lower == upper locks the lid (a hand cannot open it), a span of 2 pi is one full
+  // turn and the hand drags the lid all the way over (to 180 deg); wider spans: JointsWorld.HingeLimitsWider*.
   JewelryBoxDef locked;
   locked.lower = locked.upper = 0;
   Scene l(locked);

@@ -37,8 +37,8 @@ constexpr double kUnlimited = std::numeric_limits<double>::infinity();
 // Revolute joint. At angle theta the child pose is
 //   C(theta) = P * Trans(pivot_parent) * Rot(axis_parent, theta) * R0 * Trans(-pivot_child)
 // where R0 is the child's orientation relative to the parent at theta = 0; R0 maps axis_child onto
-// axis_parent. Limits are radians, -inf/+inf for none; upper - lower may not exceed 2*pi (a wider range
-// would make one pose mean two angles). An unlimited hinge keeps counting turns.
+// axis_parent. Limits are radians: -inf/+inf for none, else within +-1e6; any span, also wider than 2*pi
+// (the angle is unwrapped continuously and counts turns, so the lid turns more than once between its stops).
 struct HingeDef {
   BodyId parent;  // null id: the world
   BodyId child;
@@ -99,7 +99,7 @@ struct FixedDef {
 };
 
 // Throw handsim::Error(InvalidArgument) naming the field, e.g. "hinge.lower", on: non-finite or zero
-// axis, non-finite pivot, NaN limit, lower > upper, hinge span > 2*pi, child == parent, null child,
+// axis, non-finite pivot, NaN or out-of-range limit, lower > upper, child == parent, null child,
 // negative or NaN damping, non-unit quaternion, unknown enum. Whether the ids are alive is the world's job.
 void validate_joint(const HingeDef& def, const std::string& argument);
 void validate_joint(const SliderDef& def, const std::string& argument);
