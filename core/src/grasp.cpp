@@ -96,16 +96,20 @@ bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vecto
   return scan_pairs(directions, mean_axis(directions), c, &parts);
 }
 
-void validate_grasp_settings(const GraspSettings& s) {
-  validate::finite(s.cos_threshold, "cos_threshold");
-  validate::non_negative(s.grasp_time_s, "grasp_time_s");
-  validate::non_negative(s.release_time_s, "release_time_s");
-  validate::non_negative(s.closing_distance, "closing_distance");
-  validate::non_negative(s.closing_window_s, "closing_window_s");
-  validate::non_negative(s.opening_distance, "opening_distance");
-  validate::non_negative(s.release_distance, "release_distance");
-  validate::non_negative(s.tracking_grace_s, "tracking_grace_s");
-  if (s.velocity_window < 2) validate::fail("velocity_window", "must be >= 2, got " + std::to_string(s.velocity_window));
+void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) {
+  // A cosine: beyond +-1 every threshold means "never" resp. "any two parts" (opposing_contacts), so +-2
+  // keeps both settings and rejects only nonsense such as 1e308.
+  validate::in_range(s.cos_threshold, -2, 2, prefix + "cos_threshold", "");
+  // Times up to an hour, distances up to 1 m (a hand is 0.2 m long): beyond is a unit mix-up.
+  validate::in_range(s.grasp_time_s, 0, 3600, prefix + "grasp_time_s", "s");
+  validate::in_range(s.release_time_s, 0, 3600, prefix + "release_time_s", "s");
+  validate::in_range(s.closing_distance, 0, 1, prefix + "closing_distance", "m");
+  validate::in_range(s.closing_window_s, 0, 3600, prefix + "closing_window_s", "s");
+  validate::in_range(s.opening_distance, 0, 1, prefix + "opening_distance", "m");
+  validate::in_range(s.release_distance, 0, 1, prefix + "release_distance", "m");
+  validate::in_range(s.tracking_grace_s, 0, 3600, prefix + "tracking_grace_s", "s");
+  if (s.velocity_window < 2 || s.velocity_window > 1000)
+    validate::fail(prefix + "velocity_window", "must be in 2..1000 frames, got " + std::to_string(s.velocity_window));
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -37,11 +37,18 @@ namespace {
 void validate_def(const HandDef& def) {
   if (def.handedness != Handedness::Left && def.handedness != Handedness::Right)
     validate::fail("def.handedness", "must be Left or Right");
-  if (def.particle_count < 1) validate::fail("def.particle_count", "must be >= 1");
+  // 1..100,000 particles: the default is 1,182, stiff.TenThousandParticles runs 10,000; each costs skinning and
+  // contact work every step. 1..400,000 render vertices: 10x the default mesh (39,099); 2^31 - 1 was accepted
+  // and grew to 22 GB.
+  if (def.particle_count < 1 || def.particle_count > 100000)
+    validate::fail("def.particle_count", "must be in 1..100000, got " + std::to_string(def.particle_count));
   if (def.sampling != ParticleSampling::Random && def.sampling != ParticleSampling::Even)
     validate::fail("def.sampling", "must be Random or Even");
-  validate::non_negative(def.particle_radius, "def.particle_radius");
-  if (def.render_vertices < 200) validate::fail("def.render_vertices", "must be >= 200");
+  // 0 (derived from the spacing) up to 5 cm: a particle larger than a finger's width is no longer a
+  // finger's surface.
+  validate::in_range(def.particle_radius, 0, 0.05, "def.particle_radius", "m");
+  if (def.render_vertices < 200 || def.render_vertices > 400000)
+    validate::fail("def.render_vertices", "must be in 200..400000, got " + std::to_string(def.render_vertices));
 }
 
 HandModel assemble(const HandDef& def, const SkinnedMesh& source, const std::vector<uint8_t>& exposed,

@@ -153,11 +153,11 @@ void mirror(HandFrame& f) {
 HandFrame make_hand_frame(Handedness handedness, const Pose& palm_pose, const HandPoseParams& params) {
   if (handedness != Handedness::Left && handedness != Handedness::Right)
     validate::fail("handedness", "must be Left or Right");
-  Pose palm = validate::pose(palm_pose, "palm_pose");
+  Pose palm = validate::body_pose(palm_pose, "palm_pose");
   for (int i = 0; i < 5; ++i) validate::finite(params.curl[i], "params.curl[" + std::to_string(i) + "]");
   validate::finite(params.thumb_opposition, "params.thumb_opposition");
   validate::finite(params.spread, "params.spread");
-  validate::positive(params.scale, "params.scale");
+  validate::in_range(params.scale, 1e-6, 1e3, "params.scale", "");  // 1 um .. 200 m hands: finite joints
   const double s = params.scale;
 
   HandFrame f;
@@ -183,6 +183,9 @@ HandFrame bind_frame(Handedness handedness, double scale) {
   return make_hand_frame(handedness, Pose{}, p);
 }
 
+// OpenXR joint radii are a finger's half width (mm to 2 cm); 10 cm is a tracker's unit error.
+constexpr double kMaxJointRadius = 0.1;
+
 void validate_frame(const HandFrame& frame, const std::string& argument) {
   if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right)
     validate::fail(argument + ".handedness", "must be Left or Right");
@@ -192,13 +195,13 @@ void validate_frame(const HandFrame& frame, const std::string& argument) {
     // The same conditions as the checks below, without building their argument names: a good joint (every
     // joint of every step, normally) costs no allocation; a bad one falls through to the named checks.
     const bool good = jp.position.allFinite() && jp.orientation.coeffs().allFinite() &&
-                      std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && std::isfinite(jp.radius) &&
-                      jp.radius >= 0;
+                      std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && jp.radius >= 0 &&
+                      jp.radius <= kMaxJointRadius && jp.position.cwiseAbs().maxCoeff() <= validate::kMaxCoordinate;
     if (good) continue;
     std::string name = argument + ".joints[" + std::to_string(j) + "]";
-    validate::finite(jp.position, name + ".position");
+    validate::point(jp.position, name + ".position");
     validate::unit_quat(jp.orientation, name + ".orientation");
-    validate::non_negative(jp.radius, name + ".radius");
+    validate::in_range(jp.radius, 0, kMaxJointRadius, name + ".radius", "m");
   }
 }
 

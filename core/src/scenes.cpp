@@ -2,19 +2,50 @@
 
 #include "validate.h"
 
+#include <cmath>
+#include <vector>
+
 namespace handsim {
 namespace {
 
+// Every body the builder makes gets its sizes, masses and poses from these fields, so checking each field
+// against the range of what it becomes (docs/reliability.md) means no add below can fail: the builder is
+// all-or-nothing with errors naming the def's own field. (build_jewelry_box also rolls back, in case.)
 void validate_def(const JewelryBoxDef& d) {
-  validate::finite(d.position, "jewelry_box.position");
-  validate::finite(d.yaw, "jewelry_box.yaw");
-  validate::positive(d.base_half_extents, "jewelry_box.base_half_extents");
-  validate::positive(d.lid_half_thickness, "jewelry_box.lid_half_thickness");
-  validate::non_negative(d.base_mass, "jewelry_box.base_mass");
-  validate::positive(d.lid_mass, "jewelry_box.lid_mass");
-  validate::non_negative(d.lid_overhang, "jewelry_box.lid_overhang");
-  validate::non_negative(d.friction, "jewelry_box.friction");
+  validate::point(d.position, "jewelry_box.position");
+  validate::in_range(d.yaw, -validate::kMaxJointAngle, validate::kMaxJointAngle, "jewelry_box.yaw", "rad");
+  validate::size(d.base_half_extents, "jewelry_box.base_half_extents");
+  validate::size(d.lid_half_thickness, "jewelry_box.lid_half_thickness");
+  validate::mass(d.base_mass, "jewelry_box.base_mass");
+  validate::mass(d.lid_mass, "jewelry_box.lid_mass");
+  if (d.lid_mass == 0) validate::fail("jewelry_box.lid_mass", "must be > 0: the lid is a hinge's moving child");
+  validate::in_range(d.lid_overhang, 0, validate::kMaxCoordinate, "jewelry_box.lid_overhang", "m");
+  validate::friction(d.friction, "jewelry_box.friction");
+  // Derived: the lid reaches base depth + overhang, the base and lid stack on position; the table's half
+  // height is half the table top's height.
+  const Vec3& e = d.base_half_extents;
+  validate::at_most(e.z() + 0.5 * d.lid_overhang, validate::kMaxCoordinate, "jewelry_box.lid_overhang");
+  validate::at_most(std::abs(d.position.y()) + 2 * (e.y() + d.lid_half_thickness) + e.z() + d.lid_overhang,
+                    validate::kMaxCoordinate, "jewelry_box.position");
+  if (d.table && !(0.5 * d.position.y() >= validate::kMinSize))
+    validate::fail("jewelry_box.position", "with table = true, y is the table top's height and must be >= " +
+                                               validate::fmt(2 * validate::kMinSize) + " m, got " +
+                                               validate::fmt(d.position.y()));
 }
+
+// Removes what a failed build added, newest first (so the slots are reused in the same order).
+struct Rollback {
+  World& world;
+  std::vector<BodyId> bodies;
+  std::vector<JointId> joints;
+  bool done = false;
+  ~Rollback() {
+    if (done) return;
+    // Another thread may have removed them already (StaleId); a destructor must not throw.
+    for (auto it = joints.rbegin(); it != joints.rend(); ++it) try { world.remove_joint(*it); } catch (const Error&) {}
+    for (auto it = bodies.rbegin(); it != bodies.rend(); ++it) try { world.remove_body(*it); } catch (const Error&) {}
+  }
+};
 
 Quat yaw_rotation(double yaw) { return Quat(Eigen::AngleAxisd(yaw, Vec3::UnitY())); }
 
@@ -34,6 +65,7 @@ JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
 
   const Quat q = yaw_rotation(d.yaw);
   const Vec3& e = d.base_half_extents;
+  Rollback undo{world, {}, {}};
   JewelryBox box;
   box.def = d;
   if (d.table) {
@@ -43,6 +75,7 @@ JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
     table.pose = {Vec3(d.position.x(), 0.5 * d.position.y(), d.position.z()), q};
     table.friction = d.friction;
     box.table = world.add_body(table);
+    undo.bodies.push_back(box.table);
   }
   BodyDef base;
   base.shape = ShapeDef::box(e);
@@ -50,6 +83,7 @@ JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
   base.pose = {d.position + q * Vec3(0, e.y(), 0), q};
   base.friction = d.friction;
   box.base = world.add_body(base);
+  undo.bodies.push_back(box.base);
 
   BodyDef lid;
   const double lid_half_depth = e.z() + 0.5 * d.lid_overhang;
@@ -58,6 +92,7 @@ JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
   lid.pose = {d.position + q * Vec3(0, 2 * e.y() + d.lid_half_thickness, 0.5 * d.lid_overhang), q};
   lid.friction = d.friction;
   box.lid = world.add_body(lid);
+  undo.bodies.push_back(box.lid);
 
   // The hinge runs along the back (-Z) edge where the lid's underside meets the base's top.
   hinge.parent = box.base;
@@ -67,6 +102,7 @@ JewelryBox build_jewelry_box(World& world, const JewelryBoxDef& d) {
   hinge.pivot_child = Vec3(0, -d.lid_half_thickness, -lid_half_depth);
   hinge.axis_child = -Vec3::UnitX();
   box.hinge = world.add_joint(hinge);
+  undo.done = true;
   return box;
 }
 
@@ -104,6 +140,10 @@ HandPoseParams lid_pinch_shape() {
 }
 
 Pose JewelryBox::lid_pinch_palm(const World& world, Handedness handedness, double angle, double lift) const {
+  validate::in_range(angle, -validate::kMaxJointAngle, validate::kMaxJointAngle, "angle", "rad");
+  validate::in_range(lift, -validate::kMaxCoordinate, validate::kMaxCoordinate, "lift", "m");
+  if (handedness != Handedness::Left && handedness != Handedness::Right)
+    validate::fail("handedness", "must be Left or Right");
   // Measured on make_hand_frame(lid_pinch_shape()): with the palm 6 mm above the lid top and 6.2 cm in front
   // of the lip, the index tip rests 5 cm in on the lid and the thumb tip sits under the lip, 2.4 cm to the
   // thumb side of the palm centre: the hand is shifted that way to centre the pinch on the lid.

@@ -5,29 +5,29 @@
 namespace handsim {
 
 void validate_shape(const ShapeDef& s, const std::string& arg) {
+  auto check_points = [&] {
+    for (size_t i = 0; i < s.points.size(); ++i) validate::point(s.points[i], arg + ".points[" + std::to_string(i) + "]");
+  };
   switch (s.type) {
     case ShapeType::Box:
-      validate::positive(s.half_extents, arg + ".half_extents");
-      validate::at_most(s.half_extents.maxCoeff(), validate::kMaxCoordinate, arg + ".half_extents");
+      validate::size(s.half_extents, arg + ".half_extents");
       return;
     case ShapeType::Sphere:
-      validate::positive(s.radius, arg + ".radius");
-      validate::at_most(s.radius, validate::kMaxCoordinate, arg + ".radius");
+      validate::size(s.radius, arg + ".radius");
       return;
     case ShapeType::Capsule:
-      validate::positive(s.radius, arg + ".radius");
-      validate::non_negative(s.half_height, arg + ".half_height");
-      validate::at_most(s.radius + s.half_height, validate::kMaxCoordinate, arg + ".radius");
+      validate::size(s.radius, arg + ".radius");
+      validate::in_range(s.half_height, 0, validate::kMaxCoordinate, arg + ".half_height", "m");
       return;
     case ShapeType::ConvexHull:
       if (s.points.size() < 4) validate::fail(arg + ".points", "a convex hull needs at least 4 points");
-      for (const Vec3& p : s.points) validate::at_most(p.cwiseAbs().maxCoeff(), validate::kMaxCoordinate, arg + ".points");
+      check_points();
       return;
     case ShapeType::TriangleMesh:
       if (s.points.size() < 3) validate::fail(arg + ".points", "a triangle mesh needs at least 3 vertices");
       if (s.indices.empty() || s.indices.size() % 3 != 0)
         validate::fail(arg + ".indices", "must hold three vertex indices per triangle");
-      for (const Vec3& p : s.points) validate::at_most(p.cwiseAbs().maxCoeff(), validate::kMaxCoordinate, arg + ".points");
+      check_points();
       for (int i : s.indices)
         if (i < 0 || size_t(i) >= s.points.size())
           validate::fail(arg + ".indices", "index " + std::to_string(i) + " is out of range");

@@ -56,6 +56,28 @@ void point(const Vec3& v, const std::string& argument) {
     fail(argument, "must be within " + fmt(kMaxCoordinate) + " m of the origin, got " + fmt(v));
 }
 
+void in_range(double v, double lo, double hi, const std::string& argument, const char* unit) {
+  if (!(v >= lo && v <= hi)) {
+    const std::string u = *unit ? std::string(" ") + unit : std::string();
+    fail(argument, "must be in [" + fmt(lo) + ", " + fmt(hi) + "]" + u + ", got " + fmt(v));
+  }
+}
+
+void size(double v, const std::string& argument) { in_range(v, kMinSize, kMaxCoordinate, argument, "m"); }
+
+void size(const Vec3& v, const std::string& argument) {
+  if (!(v.array() >= kMinSize).all() || !(v.array() <= kMaxCoordinate).all())
+    fail(argument, "every component must be in [" + fmt(kMinSize) + ", " + fmt(kMaxCoordinate) + "] m, got " + fmt(v));
+}
+
+void mass(double v, const std::string& argument) {
+  if (v == 0) return;
+  if (!(v >= kMinMass && v <= kMaxMass))
+    fail(argument, "must be 0 (static) or in [" + fmt(kMinMass) + ", " + fmt(kMaxMass) + "] kg, got " + fmt(v));
+}
+
+void friction(double v, const std::string& argument) { in_range(v, 0, kMaxFriction, argument, ""); }
+
 Pose body_pose(const Pose& p, const std::string& argument) {
   Pose out = pose(p, argument);
   point(p.position, argument + ".position");

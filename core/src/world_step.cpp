@@ -16,6 +16,21 @@
 #include <tuple>
 
 namespace handsim {
+namespace {
+// A held or released body's velocity never exceeds the cap every caller's velocity is held to (1e4 m/s,
+// rad/s): the direction is kept, the magnitude capped.
+Vec3 capped_speed(const Vec3& v) {
+  const double n = v.norm();
+  return n > validate::kMaxSpeed ? Vec3(v * (validate::kMaxSpeed / n)) : v;
+}
+
+// Whether the palm went from `a` to `b` in dt faster than the speed cap (m/s or rad/s).
+bool teleported(const Pose& a, const Pose& b, double dt) {
+  const double angle = a.orientation.angularDistance(b.orientation);
+  return (b.position - a.position).norm() > validate::kMaxSpeed * dt || angle > validate::kMaxSpeed * dt;
+}
+}  // namespace
+
 
 void World::step(double dt, const std::vector<HandFrame>& frames) {
   const auto held = lock();
@@ -46,6 +61,11 @@ void World::step(double dt, const std::vector<HandFrame>& frames) {
 
 void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames) const {
   validate::time_step(dt);
+  // The clock is a double: at t = 1000 s a step below 1.1e-13 s would not advance it (and the hand history
+  // would then see time stand still).
+  if (!(time + dt > time))
+    validate::fail("dt", validate::fmt(dt) + " s is below the clock's resolution at t = " + validate::fmt(time) +
+                             " s (time + dt == time)");
   size_t live = 0;
   for (const HandSlot& h : hands) live += h.alive;
   if (frames.size() > live)
@@ -94,7 +114,12 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
       h.reach_groups.clear();  // far from every body: no contact is possible this frame
       h.reach_groups_only = true;
     }
-    h.palm = {frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
+    const Pose palm{frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
+    // A palm that moved faster than the speed cap since its last frame teleported (a tracker glitch, a
+    // re-centred play space): its motion history says nothing about the new place, and what it holds arrives
+    // there at rest instead of being flung (a 1e6 m jump threw a held cube at 1.8e7 m/s; issue 22).
+    if (h.has_pose && teleported(h.palm, palm, dt)) h.history.clear();
+    h.palm = palm;
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
     h.grip.push(grip_span(*h.model, h.state.bones), h.palm.position, time + dt, def.grasp.closing_window_s);
@@ -610,8 +635,8 @@ void World::Impl::release(Body& b, const BodyVelocity& velocity) {
   b.grasp = GraspInfo();
   b.just_released = true;
   released.push_back(uint32_t(&b - bodies.data()));
-  b.linear = velocity.linear;
-  b.angular = velocity.angular;
+  b.linear = capped_speed(velocity.linear);
+  b.angular = capped_speed(velocity.angular);
   set_motion(b, BodyMotion::Dynamic);
   backend->write(b.backend, b.pose, b.linear, b.angular);
 }
@@ -649,8 +674,8 @@ std::string World::Impl::follow_primary_hands() {
     const HandSlot& h = hands[b.grasp.primary.index];
     b.pose = h.palm * b.grasp.primary_relative;
     const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
-    b.linear = v.linear;
-    b.angular = v.angular;
+    b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
+    b.angular = capped_speed(v.angular);
     ++following;
   }
   if (following == 0) return "skip: nothing grasped";

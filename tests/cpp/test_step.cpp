@@ -712,6 +712,30 @@ TEST(Step, ResetMidGraspEndsTheGraspAndContacts) {
   EXPECT_TRUE(s.world.events().empty());
 }
 
+// Issue 22 item 2: a held body never gets a velocity above the cap (1e4 m/s). A hand that jumps 1e6 m in one
+// frame (a tracker glitch) carries the cube along at rest, and letting go there leaves it at rest; before, the
+// cube followed at 1.8e7 m/s.
+TEST(Step, TeleportingHandCarriesItsBodyWithoutFlingingIt) {
+  Scene s;
+  s.grasp();
+  const Pose at = s.lift(0.05, 10);
+  ASSERT_TRUE(s.world.body_grasp(s.box).grasped);
+  const Pose far = translation(Vec3(1e6, 0, 0)) * at;
+  double fastest = 0;
+  for (int i = 0; i < 10; ++i) {
+    s.step({s.pinch.frame(far, s.hold())});
+    fastest = std::max(fastest, s.world.body_linear_velocity(s.box).norm());
+  }
+  EXPECT_LE(fastest, 1e-9) << "the jump is no motion: the cube arrives at rest";
+  for (int i = 0; i < 30; ++i) {
+    s.step({s.pinch.frame(far, s.open())});
+    fastest = std::max(fastest, s.world.body_linear_velocity(s.box).norm());
+  }
+  EXPECT_FALSE(s.world.body_grasp(s.box).grasped);
+  EXPECT_LE(fastest, 10.0) << "only gravity after the release (0.5 s: 4.9 m/s)";
+  EXPECT_LE((s.world.body_pose(s.box).position - far.position).norm(), 2.0);
+}
+
 // Removing the holding hand: the cube is let go at rest (HandRemoved) and falls; the world has no hand left.
 TEST(Step, RemovingTheHoldingHandDropsTheBodyAtRest) {
   Scene s;

@@ -63,6 +63,7 @@ struct GraspSettings {
   int velocity_window = 4;
 };
 // Throws handsim::Error naming the bad field.
-void validate_grasp_settings(const GraspSettings& s);
+// Throws Error naming prefix + the field ("world.grasp.cos_threshold"); docs/reliability.md lists the ranges.
+void validate_grasp_settings(const GraspSettings& s, const std::string& prefix = "");
 
 }  // namespace handsim
