@@ -183,8 +183,9 @@ HandFrame bind_frame(Handedness handedness, double scale) {
   return make_hand_frame(handedness, Pose{}, p);
 }
 
-// OpenXR joint radii are a finger's half width (mm to 2 cm); 10 cm is a tracker's unit error.
-constexpr double kMaxJointRadius = 0.1;
+// OpenXR joint radii are a finger's half width (mm to 2 cm), but adapters derive them from whatever a
+// recording says (a fuzzed Leap document gives 0.25 m): a radius is a length like any other, up to 1e7 m.
+constexpr double kMaxJointRadius = validate::kMaxCoordinate;
 
 void validate_frame(const HandFrame& frame, const std::string& argument) {
   if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right)

@@ -271,7 +271,7 @@ static class CSharpTest
                     Status.InvalidArgument, "out_joints: capacity 20 is too small, needs 26");
 
             def.Mass = -1;
-            Rejects(world, () => world.AddBody(def), Status.InvalidArgument, "body.mass: must be finite and >= 0");
+            Rejects(world, () => world.AddBody(def), Status.InvalidArgument, "body.mass: must be 0 (static) or in [1e-06, 1e+06] kg");
             def = BodyDef.Default;
             def.Shape.Type = ShapeType.ConvexHull;
             Rejects(world, () => world.AddBody(def, new[] { new Vec3(0, 0, 0) }), Status.InvalidArgument, "body.shape.points: a convex hull needs at least 4 points");
@@ -284,7 +284,7 @@ static class CSharpTest
             Rejects(world, () => world.AddBall(ball), Status.Unsupported, "ball.solver: the ball joint supports only");
             WorldSettings settings = WorldSettings.Default;
             settings.FixedSubstep = 0;
-            Rejects(null, () => new World(settings), Status.InvalidArgument, "settings.fixed_substep: must be finite and > 0");
+            Rejects(null, () => new World(settings), Status.InvalidArgument, "settings.fixed_substep: must be in [1e-06, 1] s");
 
             world.Step(Dt, input);  // still steps
             world.Dispose();
