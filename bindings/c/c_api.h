@@ -5,6 +5,7 @@
 #include "handsim.h"
 
 #include "handsim/scenes.h"
+#include "handsim/tables.h"
 #include "handsim/world.h"
 #include "validate.h"
 
@@ -117,6 +118,10 @@ struct ToCpp {
   void operator()(const handsim_quat& c, Quat& d) const { d = to_cpp(c); }
   void operator()(const handsim_pose& c, Pose& d) const { d = to_cpp(c); }
   // An optional C++ field and its C flag ("has_...") and value; `absent` is what the C side shows without one.
+  // A nested struct with a field map of its own (WorldDef::grasp, BodyDef::shape); the overloads above are more
+  // specialised, so this one takes only what they do not.
+  template <class C, class D>
+  void operator()(const C& c, D& d) const { fields(c, d, *this); }
   template <class C, class V>
   void operator()(const int32_t& has, const C& c, std::optional<V>& d, const V& /*absent*/) const {
     if (!has) return d.reset();
@@ -138,6 +143,8 @@ struct ToC {
   void operator()(handsim_vec3& c, const Vec3& d) const { c = to_c(d); }
   void operator()(handsim_quat& c, const Quat& d) const { c = to_c(d); }
   void operator()(handsim_pose& c, const Pose& d) const { c = to_c(d); }
+  template <class C, class D>
+  void operator()(C& c, const D& d) const { fields(c, d, *this); }
   template <class C, class V>
   void operator()(int32_t& has, C& c, const std::optional<V>& d, const V& absent) const {
     has = d.has_value();

@@ -6,31 +6,13 @@
 
 namespace handsim::capi {
 
-HANDSIM_C_FIELDS(handsim_grasp_settings, GraspSettings) {
-  f(c.cos_threshold, d.cos_threshold);
-  f(c.release_distance, d.release_distance);
-  f(c.tracking_grace_s, d.tracking_grace_s);
-  f(c.grasp_time_s, d.grasp_time_s);
-  f(c.release_time_s, d.release_time_s);
-  f(c.closing_distance, d.closing_distance);
-  f(c.closing_window_s, d.closing_window_s);
-  f(c.opening_distance, d.opening_distance);
-  f(c.velocity_window, d.velocity_window);
-  f(c.across_parts, d.across_parts);
-}
+// The mirrored defs map the rows of handsim/def_table.h by name: a row without its C field does not compile.
+#define HANDSIM_C_FIELD_ROW(Def, field) f(c.field, d.field);
+#define HANDSIM_C_FIELD_MAP(Def, CStruct, ROWS) \
+  HANDSIM_C_FIELDS(CStruct, Def) { ROWS(HANDSIM_C_FIELD_ROW) }
+HANDSIM_C_FIELD_MAP(GraspSettings, handsim_grasp_settings, HANDSIM_FIELDS_GRASP_SETTINGS)
 
-HANDSIM_C_FIELDS(handsim_world_settings, WorldDef) {
-  f(c.gravity, d.gravity);
-  f(c.fixed_substep, d.fixed_substep);
-  f(c.max_substeps, d.max_substeps);
-  f(c.ground, d.ground);
-  f(c.ground_height, d.ground_height);
-  f(c.ground_friction, d.ground_friction);
-  f(c.solver_iterations, d.solver_iterations);
-  f(c.joint_max_iterations, d.joint_max_iterations);
-  fields(c.grasp, d.grasp, f);
-  f(c.particle_contacts, d.particle_contacts);
-}
+HANDSIM_C_FIELD_MAP(WorldDef, handsim_world_settings, HANDSIM_FIELDS_WORLD_DEF)
 
 // The scalars of a shape; hull points and mesh indices are arrays the body conversion reads (c_bodies.cpp).
 HANDSIM_C_FIELDS(handsim_shape, ShapeDef) {
@@ -40,16 +22,7 @@ HANDSIM_C_FIELDS(handsim_shape, ShapeDef) {
   f(c.half_height, d.half_height);
 }
 
-HANDSIM_C_FIELDS(handsim_body_def, BodyDef) {
-  fields(c.shape, d.shape, f);
-  f(c.mass, d.mass);
-  f(c.pose, d.pose);
-  f(c.linear_velocity, d.linear_velocity);
-  f(c.angular_velocity, d.angular_velocity);
-  f(c.friction, d.friction);
-  f(c.restitution, d.restitution);
-  f(c.kinematic, d.kinematic);
-}
+HANDSIM_C_FIELD_MAP(BodyDef, handsim_body_def, HANDSIM_FIELDS_BODY_DEF)
 
 HANDSIM_C_FIELDS(handsim_grasp_info, GraspInfo) {
   f(c.grasped, d.grasped);
@@ -125,14 +98,7 @@ HANDSIM_C_FIELDS(handsim_joint_state, JointState) {
   f(c.solve_seconds, d.solve_seconds);
 }
 
-HANDSIM_C_FIELDS(handsim_hand_def, HandDef) {
-  f(c.handedness, d.handedness);
-  f(c.particle_count, d.particle_count);
-  f(c.sampling, d.sampling);
-  f(c.render_vertices, d.render_vertices);
-  f(c.seed, d.seed);
-  f(c.particle_radius, d.particle_radius);
-}
+HANDSIM_C_FIELD_MAP(HandDef, handsim_hand_def, HANDSIM_FIELDS_HAND_DEF)
 
 HANDSIM_C_FIELDS(handsim_joint_pose, JointPose) {
   f(c.position, d.position);
@@ -159,29 +125,17 @@ HANDSIM_C_FIELDS(handsim_event, Event) {
   f(c.body, d.body);
 }
 
-HANDSIM_C_FIELDS(handsim_jewelry_box_def, JewelryBoxDef) {
-  f(c.position, d.position);
-  f(c.yaw, d.yaw);
-  f(c.base_half_extents, d.base_half_extents);
-  f(c.lid_half_thickness, d.lid_half_thickness);
-  f(c.lid_overhang, d.lid_overhang);
-  f(c.base_mass, d.base_mass);
-  f(c.lid_mass, d.lid_mass);
-  f(c.lower, d.lower);
-  f(c.upper, d.upper);
-  f(c.damping, d.damping);
-  f(c.friction, d.friction);
-  f(c.table, d.table);
-  f(c.model, d.model);
-  f(c.solver, d.solver);
-}
+HANDSIM_C_FIELD_MAP(JewelryBoxDef, handsim_jewelry_box_def, HANDSIM_FIELDS_JEWELRY_BOX_DEF)
 
 HANDSIM_C_FIELDS(handsim_jewelry_box, JewelryBox) {
   f(c.table, d.table);
   f(c.base, d.base);
   f(c.lid, d.lid);
   f(c.hinge, d.hinge);
-  fields(c.def, d.def, f);
+  f(c.def, d.def);
 }
+
+#undef HANDSIM_C_FIELD_MAP
+#undef HANDSIM_C_FIELD_ROW
 
 }  // namespace handsim::capi

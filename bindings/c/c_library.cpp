@@ -20,6 +20,15 @@ const handsim_layout_entry kLayout[] = {
 #undef HANDSIM_LAYOUT_FIELD
 constexpr int32_t kLayoutCount = int32_t(sizeof kLayout / sizeof kLayout[0]);
 
+// Every constant of handsim.h that names an enum value must exist and carry the core's number: a value added to
+// enum_table.h and not to handsim.h (or numbered differently) stops the build here.
+#define HANDSIM_CHECK_C_CONSTANT(Enum, Value, number, UPPER, C_CONSTANT)              \
+  static_assert(C_CONSTANT == number && int(handsim::Enum::Value) == number,          \
+                #C_CONSTANT " must equal handsim::" #Enum "::" #Value " (" #number ")");
+HANDSIM_ENUM_VALUES(HANDSIM_CHECK_C_CONSTANT)
+#undef HANDSIM_CHECK_C_CONSTANT
+constexpr int32_t kEnumCount = int32_t(sizeof kEnumValues / sizeof kEnumValues[0]);
+
 }  // namespace
 
 void set_last_error(const char* message) noexcept {
@@ -90,15 +99,23 @@ HANDSIM_API uint32_t HANDSIM_CALL handsim_features(void) {
 HANDSIM_API const char* HANDSIM_CALL handsim_last_error(void) { return t_last_error; }
 
 HANDSIM_API const char* HANDSIM_CALL handsim_status_name(int status) {
-  switch (status) {
-    case HANDSIM_OK: return "Ok";
-    case HANDSIM_INVALID_ARGUMENT: return "InvalidArgument";
-    case HANDSIM_STALE_ID: return "StaleId";
-    case HANDSIM_INVALID_STATE: return "InvalidState";
-    case HANDSIM_UNSUPPORTED: return "Unsupported";
-    case HANDSIM_INTERNAL: return "Internal";
-    default: return "Unknown";
-  }
+  for (const EnumValue& row : kEnumValues)
+    if (std::strcmp(row.type, "Status") == 0 && row.value == status) return row.name;
+  return "Unknown";
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_enum_count(int32_t* count) {
+  return guarded([&] { deref(count, "count") = kEnumCount; });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_enum_value(int32_t index, handsim_enum_entry* out_entry) {
+  return guarded([&] {
+    handsim_enum_entry& out = deref(out_entry, "out_entry");
+    if (index < 0 || index >= kEnumCount)
+      validate::fail("index", "must be in 0.." + std::to_string(kEnumCount - 1) + ", got " + std::to_string(index));
+    const EnumValue& row = kEnumValues[index];
+    out = {row.type, row.name, row.constant, row.value, 0};
+  });
 }
 
 HANDSIM_API int HANDSIM_CALL handsim_layout_count(int32_t* count) {

@@ -30,8 +30,10 @@
 
 /* ABI version: major << 16 | minor. The major changes when a struct layout or a function signature changes
  * (a host built against another major must not load this library); the minor when functions are added or a
- * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule;
- * 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand). */
+ * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule).
+ * 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand;
+ * handsim_world_settings gained paper_pipeline and render_threads (it now mirrors every WorldDef field);
+ * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value). */
 #define HANDSIM_ABI_VERSION_MAJOR 2
 #define HANDSIM_ABI_VERSION_MINOR 0
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
@@ -53,7 +55,9 @@ extern "C" {
 #endif
 
 /* ---------------------------------------------------------------------------------------------------------
- * Status codes (the numbers of handsim::Status) and constants */
+ * Status codes (the numbers of handsim::Status) and constants. Every enum value below is a row of the core's
+ * enum table (core/include/handsim/enum_table.h); the library is compiled against both and fails to build if a
+ * number differs, and handsim_enum_value() lists the rows at run time. */
 
 enum {
   HANDSIM_OK = 0,
@@ -82,7 +86,7 @@ enum { HANDSIM_CONTACTS_CLOSED_FORM = 0, HANDSIM_CONTACTS_BULLET_OBJECTS = 1 };
 enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_EVENT_GRASP_BEGIN = 2,
        HANDSIM_EVENT_GRASP_END = 3 };
 enum { HANDSIM_REASON_NONE = 0, HANDSIM_REASON_RELEASED = 1, HANDSIM_REASON_TRACKING_LOST = 2,
-       HANDSIM_REASON_BODY_REMOVED = 3 };
+       HANDSIM_REASON_BODY_REMOVED = 3, HANDSIM_REASON_HAND_REMOVED = 4 };
 
 /* ---------------------------------------------------------------------------------------------------------
  * Types */
@@ -111,7 +115,7 @@ typedef struct handsim_grasp_settings {
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
 } handsim_grasp_settings;
 
-/* Mirrors handsim::WorldDef. */
+/* Mirrors handsim::WorldDef, field for field (the library's build checks it against the core's field table). */
 typedef struct handsim_world_settings {
   handsim_vec3 gravity;          /* m/s^2 */
   double fixed_substep;          /* s; a frame's dt is consumed in whole substeps */
@@ -123,6 +127,8 @@ typedef struct handsim_world_settings {
   int32_t joint_max_iterations;  /* Levenberg-Marquardt cap of the Lm / LmCeres joint solvers */
   handsim_grasp_settings grasp;
   int32_t particle_contacts;     /* HANDSIM_CONTACTS_* */
+  int32_t paper_pipeline;        /* bool: every stage every step, as the paper did (a benchmark baseline) */
+  int32_t render_threads;        /* 1..64 threads skin the render mesh when it is read (bit-identical to one) */
   int32_t reserved;
 } handsim_world_settings;
 
@@ -353,6 +359,15 @@ typedef struct handsim_layout_entry {
   int32_t size;
 } handsim_layout_entry;
 
+/* One value of one enum of this header, for binding self-checks. */
+typedef struct handsim_enum_entry {
+  const char* enum_name;         /* the C++ / C# / Python type: "EventReason" */
+  const char* value_name;        /* the C++ / C# name: "HandRemoved" (Python: "HAND_REMOVED") */
+  const char* constant;          /* the constant of this header: "HANDSIM_REASON_HAND_REMOVED" */
+  int32_t value;
+  int32_t reserved;
+} handsim_enum_entry;
+
 /* ---------------------------------------------------------------------------------------------------------
  * Library */
 
@@ -370,6 +385,10 @@ HANDSIM_API const char* HANDSIM_CALL handsim_status_name(int status);
 /* Layout of every struct in this header as the library was compiled, for binding self-checks. */
 HANDSIM_API int HANDSIM_CALL handsim_layout_count(int32_t* count);
 HANDSIM_API int HANDSIM_CALL handsim_layout(int32_t index, handsim_layout_entry* out_entry);
+
+/* Every value of every enum of this header (static strings). */
+HANDSIM_API int HANDSIM_CALL handsim_enum_count(int32_t* count);
+HANDSIM_API int HANDSIM_CALL handsim_enum_value(int32_t index, handsim_enum_entry* out_entry);
 
 /* Defaults, identical to the C++ defaults. */
 HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settings* out_settings);

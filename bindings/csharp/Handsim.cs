@@ -16,6 +16,8 @@ using System.Runtime.InteropServices;
 namespace Handsim
 {
     // --- statuses and enums (the numbers of handsim.h) ---------------------------------------------------------
+    // Each is one enum of the core's table (core/include/handsim/enum_table.h); the csharp_abi test walks the
+    // library's rows (handsim_enum_value) and fails on a value missing here, named differently or numbered apart.
 
     public enum Status { Ok = 0, InvalidArgument = 1, StaleId = 2, InvalidState = 3, Unsupported = 4, Internal = 5 }
     public enum ShapeType { Box = 0, Sphere = 1, Capsule = 2, ConvexHull = 3, TriangleMesh = 4 }
@@ -30,7 +32,7 @@ namespace Handsim
     public enum ParticleSampling { Random = 0, Even = 1 }
     public enum ParticleContacts { ClosedForm = 0, BulletObjects = 1 }
     public enum EventType { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 }
-    public enum EventReason { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3 }
+    public enum EventReason { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 }
 
     /// <summary>A failed native call: the status and the library's message (which names the argument).</summary>
     public sealed class HandsimException : Exception
@@ -191,6 +193,8 @@ namespace Handsim
         public int JointMaxIterations;
         public GraspSettings Grasp;
         public ParticleContacts ParticleContacts;
+        public Bool32 PaperPipeline;
+        public int RenderThreads;
         public int Reserved;
 
         /// <summary>The C++ defaults (WorldDef{}).</summary>
@@ -513,6 +517,16 @@ namespace Handsim
     }
 
     [StructLayout(LayoutKind.Sequential)]
+    public struct EnumEntry
+    {
+        public IntPtr EnumName;
+        public IntPtr ValueName;
+        public IntPtr Constant;
+        public int Value;
+        public int Reserved;
+    }
+
+    [StructLayout(LayoutKind.Sequential)]
     public struct LayoutEntry
     {
         public IntPtr StructName;
@@ -574,6 +588,8 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern IntPtr handsim_status_name(int status);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_layout_count(out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_layout(int index, out LayoutEntry entry);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_enum_count(out int count);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_enum_value(int index, out EnumEntry entry);
 
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_world_settings_default(out WorldSettings s);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_body_def_default(out BodyDef d);

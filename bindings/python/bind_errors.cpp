@@ -1,7 +1,10 @@
-// Maps handsim::Error to Python exceptions. Each class also derives from the matching builtin, so
-// `except ValueError` catches a bad argument and `except handsim.Error` catches anything from handsim.
+// Binds types.h and tables.h: Status and handsim::Error as Python exceptions, the enum and def tables. Each exception class also
+// derives from the matching builtin, so `except ValueError` catches a bad argument and `except handsim.Error`
+// catches anything from handsim; its `status` attribute is the Status it maps.
 #include "bindings.h"
+#include "convert.h"
 
+#include "handsim/tables.h"
 #include "handsim/types.h"
 
 #include <array>
@@ -25,6 +28,31 @@ py::object make_exception(py::module_& m, const char* name, py::handle base1, py
 }  // namespace
 
 void bind_errors(py::module_& m) {
+  py_convert::bind_enum<Status>(m, "Status", "What a call returned; the C ABI's status codes.");
+  m.def(
+      "enum_values",
+      [] {
+        py::list rows;
+        for (const EnumValue& v : kEnumValues) rows.append(py::make_tuple(v.type, v.name, v.value, v.upper, v.constant));
+        return rows;
+      },
+      "Every value of every public enum as (type, C++ name, number, Python name, C constant), from the core's "
+      "enum table (handsim/enum_table.h).");
+  m.def(
+      "def_fields",
+      [] {
+        py::dict defs;
+        for (const DefField& row : kDefFields) {
+          py::str def(row.def);
+          py::list fields = defs.contains(def) ? py::list(defs[def]) : py::list();
+          fields.append(row.field);
+          defs[def] = fields;
+        }
+        for (auto item : defs) defs[item.first] = py::tuple(py::reinterpret_borrow<py::list>(item.second));
+        return defs;
+      },
+      "The fields of every def the bindings mirror, {def: (field, ...)}, from the core's def table "
+      "(handsim/def_table.h); handsim.recording saves exactly these.");
   py::object base = make_exception(m, "Error", PyExc_Exception, nullptr, "Base of every handsim error.");
   // Indexed by Status; heap-allocated so the translator (a plain function) can reach them.
   static auto* classes = new std::array<py::object, 6>{
@@ -37,6 +65,7 @@ void bind_errors(py::module_& m) {
                      "This build lacks the feature (e.g. Ceres)."),
       make_exception(m, "InternalError", base, PyExc_RuntimeError, "An internal invariant broke (a bug)."),
   };
+  for (size_t s = 1; s < classes->size(); ++s) (*classes)[s].attr("status") = Status(int(s));
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -104,12 +104,10 @@ int checked_joint(int joint) {
 }
 
 void bind_enums(py::module_& m) {
-  py::enum_<Handedness>(m, "Handedness")
-      .value("LEFT", Handedness::Left)
-      .value("RIGHT", Handedness::Right);
-  py::enum_<ParticleSampling>(m, "ParticleSampling", "How the collision particles are chosen among the mesh vertices.")
-      .value("RANDOM", ParticleSampling::Random, "the paper: seeded uniform choice")
-      .value("EVEN", ParticleSampling::Even, "farthest-point sampling: even coverage, smaller largest gap");
+  bind_enum<Handedness>(m, "Handedness");
+  bind_enum<ParticleSampling>(m, "ParticleSampling",
+                              "How the collision particles are chosen among the mesh vertices: RANDOM (the paper, "
+                              "seeded uniform choice) or EVEN (farthest-point sampling, smaller largest gap).");
   py::list names;
   for (int j = 0; j < kHandJointCount; ++j) {
     names.append(kJointNames[j]);

@@ -92,23 +92,16 @@ void bind_solver_and_damping(py::class_<T>& cls, const std::string& prefix, cons
 }
 
 void bind_enums(py::module_& m) {
-  py::enum_<JointSolver>(m, "JointSolver", "How the micro-simulator (eq. 4) finds the joint coordinate.")
-      .value("EXACT", JointSolver::Exact, "closed form, O(1) per solve (default)")
-      .value("LM", JointSolver::Lm, "Levenberg-Marquardt over the vertices, Eigen")
-      .value("LM_CERES", JointSolver::LmCeres, "the paper's mode: Ceres Levenberg-Marquardt (needs WITH_CERES)");
-  py::enum_<JointModel>(m, "JointModel", "How the world keeps a joint together.")
-      .value("HARD", JointModel::Hard, "reduced coordinates through the micro-simulator (default)")
-      .value("SOFT", JointModel::Soft, "Bullet constraint baseline (may stretch)");
-  py::enum_<JointTermination>(m, "JointTermination", "How a micro-simulator solve ended.")
-      .value("CONVERGED", JointTermination::Converged)
-      .value("MAX_ITERATIONS", JointTermination::MaxIterations)
-      .value("DEGENERATE", JointTermination::Degenerate, "the coordinate is not observable: previous value kept")
-      .value("AT_LIMIT", JointTermination::AtLimit);
-  py::enum_<JointType>(m, "JointType")
-      .value("HINGE", JointType::Hinge)
-      .value("SLIDER", JointType::Slider)
-      .value("BALL", JointType::Ball)
-      .value("FIXED", JointType::Fixed);
+  bind_enum<JointSolver>(m, "JointSolver",
+                         "How the micro-simulator (eq. 4) finds the joint coordinate: EXACT (closed form, default), "
+                         "LM (Levenberg-Marquardt, Eigen), LM_CERES (the paper's Ceres LM; needs WITH_CERES).");
+  bind_enum<JointModel>(m, "JointModel",
+                        "How the world keeps a joint together: HARD (reduced coordinates, default) or SOFT (Bullet "
+                        "constraint baseline, may stretch).");
+  bind_enum<JointTermination>(m, "JointTermination",
+                              "How a micro-simulator solve ended (DEGENERATE: the coordinate is not observable, the "
+                              "previous value was kept).");
+  bind_enum<JointType>(m, "JointType");
 }
 
 void bind_joint_id(py::module_& m) {

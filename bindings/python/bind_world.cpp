@@ -42,12 +42,7 @@ void bind_ids(py::module_& m) {
 }
 
 void bind_shapes(py::module_& m) {
-  py::enum_<ShapeType>(m, "ShapeType")
-      .value("BOX", ShapeType::Box)
-      .value("SPHERE", ShapeType::Sphere)
-      .value("CAPSULE", ShapeType::Capsule)
-      .value("CONVEX_HULL", ShapeType::ConvexHull)
-      .value("TRIANGLE_MESH", ShapeType::TriangleMesh);
+  bind_enum<ShapeType>(m, "ShapeType");
 
   py::class_<ShapeDef> shape(m, "Shape", "A collision shape in the body's local frame.");
   shape.def(py::init([](py::kwargs kw) { return from_kwargs<ShapeDef>(kw, "Shape"); }))
@@ -98,9 +93,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("velocity_window", &GraspSettings::velocity_window);
   flag_property(gs, "across_parts", &GraspSettings::across_parts, "GraspSettings.across_parts",
                 "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)");
-  py::enum_<WorldDef::ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.")
-      .value("CLOSED_FORM", WorldDef::ParticleContacts::ClosedForm)
-      .value("BULLET_OBJECTS", WorldDef::ParticleContacts::BulletObjects);
+  bind_enum<ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.");
 
   py::class_<WorldDef> wd(m, "WorldDef", "World settings (gravity, fixed substep, ground).");
   wd.def(py::init([](py::kwargs kw) { return from_kwargs<WorldDef>(kw, "WorldDef"); }))
@@ -131,10 +124,7 @@ void bind_defs(py::module_& m) {
   HS_VEC3_PROPERTY(bd, BodyDef, linear_velocity, "body.linear_velocity");
   HS_VEC3_PROPERTY(bd, BodyDef, angular_velocity, "body.angular_velocity");
 
-  py::enum_<BodyMotion>(m, "BodyMotion")
-      .value("STATIC", BodyMotion::Static)
-      .value("DYNAMIC", BodyMotion::Dynamic)
-      .value("KINEMATIC", BodyMotion::Kinematic);
+  bind_enum<BodyMotion>(m, "BodyMotion");
 }
 
 BodyId to_body_id(py::handle h, const char* argument) { return cast_arg<BodyId>(h, argument); }

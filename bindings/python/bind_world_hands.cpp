@@ -20,16 +20,8 @@ using namespace py_convert;
 py::object optional_id(HandId id) { return id.is_null() ? py::none() : py::cast(id); }
 
 void bind_records(py::module_& m) {
-  py::enum_<EventType>(m, "EventType")
-      .value("CONTACT_BEGIN", EventType::ContactBegin)
-      .value("CONTACT_END", EventType::ContactEnd)
-      .value("GRASP_BEGIN", EventType::GraspBegin)
-      .value("GRASP_END", EventType::GraspEnd);
-  py::enum_<EventReason>(m, "EventReason", "Why a grasp ended (GRASP_END only).")
-      .value("NONE", EventReason::None)
-      .value("RELEASED", EventReason::Released)
-      .value("TRACKING_LOST", EventReason::TrackingLost)
-      .value("BODY_REMOVED", EventReason::BodyRemoved);
+  bind_enum<EventType>(m, "EventType");
+  bind_enum<EventReason>(m, "EventReason", "Why a grasp ended (GRASP_END only).");
 
   py::class_<Event>(m, "Event", "Something that happened in the last step, naming the hand and the body.")
       .def_readonly("type", &Event::type)

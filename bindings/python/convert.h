@@ -2,6 +2,7 @@
 // a wrong shape reads "pose: expected shape (7,), got (3,)".
 #pragma once
 
+#include "handsim/tables.h"
 #include "handsim/types.h"
 
 #include <pybind11/numpy.h>
@@ -106,6 +107,18 @@ T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
     }
   }
   return obj.cast<T>();
+}
+
+// A Python enum named `type` with every value of the enum table (handsim/enum_table.h) whose type it is, under
+// its UPPER name, so no value can be missing from Python (the table's Python test walks them all).
+template <class E>
+py::enum_<E> bind_enum(py::module_& m, const char* type, const char* doc = "") {
+  py::enum_<E> e(m, type, doc);
+  int count = 0;
+  for (const EnumValue& row : kEnumValues)
+    if (std::string(row.type) == type) e.value(row.upper, E(row.value)), ++count;
+  if (count == 0) throw std::logic_error(std::string("bind_enum: no enum table rows for ") + type);
+  return e;
 }
 
 }  // namespace handsim::py_convert

@@ -29,12 +29,9 @@ from . import scenes as _scenes
 FORMAT = "handsim-recording"
 FORMAT_VERSION = 1
 J = _core.JOINT_COUNT
-_GRASP_FIELDS = ("cos_threshold", "across_parts", "grasp_time_s", "release_time_s",
-                 "closing_distance", "closing_window_s", "opening_distance", "release_distance",
-                 "tracking_grace_s", "velocity_window")
-_WORLD_FIELDS = ("fixed_substep", "max_substeps", "ground", "ground_friction", "ground_height",
-                 "joint_max_iterations", "solver_iterations", "paper_pipeline")
-_HAND_FIELDS = ("particle_count", "seed", "particle_radius", "render_vertices")
+# The fields each def is saved with: the core's def table (handsim/def_table.h), so a field added to a def is
+# recorded without touching this file.
+_DEF_FIELDS = _core.def_fields()
 EDIT_OPS = ("set_body_pose", "set_body_velocity", "set_joint_value", "add_box", "remove_body")
 
 
@@ -42,56 +39,57 @@ class RecordingError(ValueError):
     """A recording file that cannot be read (wrong format, unknown version, inconsistent arrays)."""
 
 
+def _def_to_dict(obj) -> dict:
+    """Every field of a mirrored def as JSON values: enums by name, vectors as lists, nested defs as dicts."""
+    out = {}
+    for k in _DEF_FIELDS[type(obj).__name__]:
+        v = getattr(obj, k)
+        if type(v).__name__ in _DEF_FIELDS:
+            v = _def_to_dict(v)
+        elif hasattr(type(v), "__members__"):
+            v = v.name
+        elif isinstance(v, np.ndarray):
+            v = [float(x) for x in v]
+        out[k] = v
+    return out
+
+
+def _def_from_dict(cls, data: dict, where: str):
+    """The def of type `cls` with the fields `data` names (the rest default); unknown names are errors."""
+    obj = cls()
+    fields = _DEF_FIELDS[cls.__name__]
+    for k, v in data.items():
+        if k not in fields:
+            raise RecordingError(f"{where}.{k}: unknown field")
+        current = getattr(obj, k)
+        if type(current).__name__ in _DEF_FIELDS:
+            v = _def_from_dict(type(current), v, f"{where}.{k}")
+        elif hasattr(type(current), "__members__"):
+            if v not in type(current).__members__:
+                raise RecordingError(f"{where}.{k}: {v!r} is not a {type(current).__name__}")
+            v = type(current).__members__[v]
+        setattr(obj, k, v)
+    return obj
+
+
 def world_def_to_dict(d) -> dict:
     """The fields of a WorldDef as JSON-ready values (enums by name), as the header stores them."""
-    out = {k: getattr(d, k) for k in _WORLD_FIELDS}
-    out["gravity"] = [float(v) for v in d.gravity]
-    out["particle_contacts"] = d.particle_contacts.name
-    out["grasp"] = {k: getattr(d.grasp, k) for k in _GRASP_FIELDS}
-    return out
+    return _def_to_dict(d)
 
 
 def world_def_from_dict(data: dict):
     """The WorldDef of :func:`world_def_to_dict`'s output; an unknown field is a RecordingError naming it."""
-    d = _core.WorldDef()
-    for k, v in data.items():
-        if k == "grasp":
-            g = d.grasp
-            for gk, gv in v.items():
-                if gk not in _GRASP_FIELDS:
-                    raise RecordingError(f"header.world.grasp.{gk}: unknown field")
-                setattr(g, gk, gv)
-            d.grasp = g
-        elif k == "particle_contacts":
-            d.particle_contacts = _core.ParticleContacts.__members__[v]
-        elif k == "gravity" or k in _WORLD_FIELDS:
-            setattr(d, k, v)
-        else:
-            raise RecordingError(f"header.world.{k}: unknown field")
-    return d
+    return _def_from_dict(_core.WorldDef, data, "header.world")
 
 
 def hand_def_to_dict(h) -> dict:
     """The fields of a HandDef as JSON-ready values (enums by name), as the header stores them."""
-    out = {k: getattr(h, k) for k in _HAND_FIELDS}
-    out["handedness"] = h.handedness.name
-    out["sampling"] = h.sampling.name
-    return out
+    return _def_to_dict(h)
 
 
 def hand_def_from_dict(data: dict):
     """The HandDef of :func:`hand_def_to_dict`'s output; an unknown field is a RecordingError naming it."""
-    h = _core.HandDef()
-    for k, v in data.items():
-        if k == "handedness":
-            h.handedness = _core.Handedness.__members__[v]
-        elif k == "sampling":
-            h.sampling = _core.ParticleSampling.__members__[v]
-        elif k in _HAND_FIELDS:
-            setattr(h, k, v)
-        else:
-            raise RecordingError(f"header.hands[].{k}: unknown field")
-    return h
+    return _def_from_dict(_core.HandDef, data, "header.hands[]")
 
 
 @dataclasses.dataclass

@@ -73,7 +73,7 @@ static class CSharpTest
         {"handsim_hand_info", typeof(HandInfo)}, {"handsim_hand_pose_params", typeof(HandPoseParams)},
         {"handsim_event", typeof(Event)}, {"handsim_stage_report", typeof(StageReport)},
         {"handsim_jewelry_box_def", typeof(JewelryBoxDef)}, {"handsim_jewelry_box", typeof(JewelryBox)},
-        {"handsim_layout_entry", typeof(LayoutEntry)},
+        {"handsim_layout_entry", typeof(LayoutEntry)}, {"handsim_enum_entry", typeof(EnumEntry)},
     };
 
     // "LinearVelocity" -> "linear_velocity"
@@ -130,6 +130,43 @@ static class CSharpTest
                 Check(seen.Contains(kv.Key + "." + Snake(fi.Name)), kv.Key + " has no field for C# " + kv.Value.Name + "." + fi.Name);
         }
         Console.WriteLine("layouts: " + rows + " rows of " + CStructs.Count + " structs match Marshal.SizeOf/OffsetOf");
+    }
+
+    // C# names that differ from the core's: XR Hands' Handedness made a script using both fail (CS0104).
+    static readonly Dictionary<string, string> CSharpEnumNames = new Dictionary<string, string> { {"Handedness", "HandSide"} };
+
+    // Every row of the library's enum table (core/include/handsim/enum_table.h) must be a value of the C# enum of
+    // that name with that number, and every C# enum of the wrapper must hold no value the table lacks.
+    static void TestEnums()
+    {
+        int count;
+        Native.Check(Native.handsim_enum_count(out count), "handsim_enum_count");
+        var perEnum = new Dictionary<string, int>();
+        Assembly wrapper = typeof(World).Assembly;
+        for (int i = 0; i < count; ++i)
+        {
+            EnumEntry e;
+            Native.Check(Native.handsim_enum_value(i, out e), "handsim_enum_value");
+            string type = Marshal.PtrToStringAnsi(e.EnumName), name = Marshal.PtrToStringAnsi(e.ValueName);
+            if (CSharpEnumNames.ContainsKey(type)) type = CSharpEnumNames[type];
+            Type t = wrapper.GetType("Handsim." + type);
+            if (t == null || !t.IsEnum) { Check(false, "no C# enum Handsim." + type); continue; }
+            string csName = Enum.GetName(t, e.Value);
+            Check(csName == name, type + " " + e.Value + ": C# names it " + (csName ?? "nothing") + ", the core " + name);
+            perEnum[type] = perEnum.ContainsKey(type) ? perEnum[type] + 1 : 1;
+        }
+        int enums = 0;
+        foreach (Type t in wrapper.GetTypes())
+        {
+            if (!t.IsEnum || t.Namespace != "Handsim" || !t.IsPublic) continue;
+            ++enums;
+            int rows;
+            Check(perEnum.TryGetValue(t.Name, out rows), "C# enum " + t.Name + " is not in the library's enum table");
+            Check(Enum.GetValues(t).Length == rows, "C# enum " + t.Name + " has " + Enum.GetValues(t).Length +
+                  " values, the table " + rows);
+        }
+        Check(enums == perEnum.Count, "C# declares " + enums + " enums, the table " + perEnum.Count);
+        Console.WriteLine("enums: " + count + " values of " + perEnum.Count + " enums match the library's table");
     }
 
     // --- the scenario ------------------------------------------------------------------------------------------------
@@ -543,6 +580,7 @@ static class CSharpTest
         Console.WriteLine("libhandsim " + Marshal.PtrToStringAnsi(Native.handsim_version()) + ", ABI 0x" +
                           Native.handsim_abi_version().ToString("x8") + ", " + IntPtr.Size * 8 + "-bit mono");
         TestLayouts();
+        TestEnums();
         TestScenario(args[0]);
         TestBadInputs();
         TestShapesJointsAndMesh();

@@ -17,6 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "handsim/def_table.h"  /* the core's tables: preprocessor rows, valid C */
+#include "handsim/enum_table.h"
 #include "scenario.h"
 
 static int g_checks = 0;
@@ -589,6 +591,89 @@ static void test_layout(void) {
   }
 }
 
+/* --- enums: every row of the core's table is a constant of handsim.h with the core's number, and the library
+ * lists the same rows (a constant missing from handsim.h does not compile) ---------------------------------- */
+
+typedef struct c_enum {
+  const char* enum_name;
+  const char* value_name;
+  const char* constant;
+  int table_value, header_value;
+} c_enum;
+
+#define HANDSIM_C_ENUM_ROW(Enum, Value, number, UPPER, C_CONSTANT) {#Enum, #Value, #C_CONSTANT, number, C_CONSTANT},
+static const c_enum kCEnums[] = {HANDSIM_ENUM_VALUES(HANDSIM_C_ENUM_ROW)};
+#undef HANDSIM_C_ENUM_ROW
+
+static void test_enums(void) {
+  int32_t count = 0, i;
+  const int32_t expected = (int32_t)(sizeof kCEnums / sizeof kCEnums[0]);
+  MUST(handsim_enum_count(&count));
+  CHECK(count == expected, "the library lists %d enum values, the table %d", (int)count, (int)expected);
+  for (i = 0; i < count && i < expected; ++i) {
+    handsim_enum_entry e;
+    const c_enum* c = &kCEnums[i];
+    MUST(handsim_enum_value(i, &e));
+    CHECK(c->header_value == c->table_value, "%s is %d in handsim.h, %d in the table", c->constant, c->header_value,
+          c->table_value);
+    CHECK(strcmp(e.enum_name, c->enum_name) == 0 && strcmp(e.value_name, c->value_name) == 0 &&
+              strcmp(e.constant, c->constant) == 0 && e.value == c->table_value,
+          "row %d: library %s::%s %s = %d, table %s::%s %s = %d", (int)i, e.enum_name, e.value_name, e.constant,
+          (int)e.value, c->enum_name, c->value_name, c->constant, c->table_value);
+  }
+  REJECT(NULL, handsim_enum_value(count, NULL), HANDSIM_INVALID_ARGUMENT, "out_entry: must not be null");
+  {
+    handsim_enum_entry e;
+    REJECT(NULL, handsim_enum_value(-1, &e), HANDSIM_INVALID_ARGUMENT, "index: must be in 0..");
+  }
+  printf("enums: %d values, each a constant of handsim.h\n", (int)count);
+}
+
+/* --- mirrored defs: every field of a C struct that mirrors a core def is a row of the def table (the library's
+ * build already fails on a row without its C field) ------------------------------------------------------------ */
+
+typedef struct c_def_field {
+  const char* def;
+  const char* field;
+} c_def_field;
+
+#define HANDSIM_C_DEF_ROW(Def, field) {#Def, #field},
+#define HANDSIM_C_DEF_ROWS(Def, CStruct, ROWS) ROWS(HANDSIM_C_DEF_ROW)
+static const c_def_field kCDefFields[] = {HANDSIM_DEFS(HANDSIM_C_DEF_ROWS)};
+#undef HANDSIM_C_DEF_ROWS
+#define HANDSIM_C_DEF_PAIR(Def, CStruct, ROWS) {#Def, #CStruct},
+static const c_def_field kCMirrors[] = {HANDSIM_DEFS(HANDSIM_C_DEF_PAIR)}; /* {def, C struct} */
+#undef HANDSIM_C_DEF_PAIR
+#undef HANDSIM_C_DEF_ROW
+
+static int is_def_row(const char* def, const char* field) {
+  size_t i;
+  for (i = 0; i < sizeof kCDefFields / sizeof kCDefFields[0]; ++i)
+    if (strcmp(kCDefFields[i].def, def) == 0 && strcmp(kCDefFields[i].field, field) == 0) return 1;
+  return 0;
+}
+
+static void test_mirrored_defs(void) {
+  int32_t count = 0, i;
+  int checked = 0;
+  size_t m;
+  MUST(handsim_layout_count(&count));
+  for (i = 0; i < count; ++i) {
+    handsim_layout_entry e;
+    MUST(handsim_layout(i, &e));
+    if (!e.field_name || strcmp(e.field_name, "reserved") == 0) continue;
+    for (m = 0; m < sizeof kCMirrors / sizeof kCMirrors[0]; ++m) {
+      if (strcmp(kCMirrors[m].field, e.struct_name) != 0) continue;
+      CHECK(is_def_row(kCMirrors[m].def, e.field_name), "%s.%s mirrors no field of %s in handsim/def_table.h",
+            e.struct_name, e.field_name, kCMirrors[m].def);
+      ++checked;
+    }
+  }
+  CHECK(checked == (int)(sizeof kCDefFields / sizeof kCDefFields[0]), "%d mirrored C fields, %d def rows", checked,
+        (int)(sizeof kCDefFields / sizeof kCDefFields[0]));
+  printf("mirrored defs: %d C fields, each a row of the def table\n", checked);
+}
+
 int main(int argc, char** argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: %s <hash_out> [<reference_hash_file>]\n", argv[0]);
@@ -599,6 +684,8 @@ int main(int argc, char** argv) {
   CHECK(handsim_abi_version() >> 16 == HANDSIM_ABI_VERSION_MAJOR, "ABI major mismatch");
   CHECK(strcmp(handsim_status_name(HANDSIM_STALE_ID), "StaleId") == 0, "status names");
   test_layout();
+  test_enums();
+  test_mirrored_defs();
   test_scenario(argv[1], argc > 2 ? argv[2] : NULL);
   test_shapes_and_joints();
   test_bad_inputs();

@@ -1,9 +1,12 @@
 // The foundation: bodies in a Bullet-backed world, checked against analytic answers.
+#include "handsim/tables.h"
 #include "handsim/world.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <map>
+#include <set>
 #include <stdexcept>
 
 #include <cmath>
@@ -310,4 +313,37 @@ TEST(LeanPipeline, ThreadedRenderSkinningIsBitIdentical) {
   WorldDef bad;
   bad.render_threads = 0;
   EXPECT_THROW(World{bad}, Error);
+}
+
+// The enum table (handsim/enum_table.h) declares the C++ enums; each enum's rows must number its values 0..n-1
+// with names used once, since the C ABI, C# and Python index and name values by those rows.
+TEST(Tables, EveryEnumIsNumberedFromZeroWithUniqueNames) {
+  std::map<std::string, std::vector<const EnumValue*>> by_type;
+  for (const EnumValue& row : kEnumValues) by_type[row.type].push_back(&row);
+  EXPECT_EQ(by_type.size(), 12u);
+  for (const auto& [type, rows] : by_type) {
+    std::set<std::string> names, uppers, constants;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      EXPECT_EQ(rows[i]->value, int(i)) << type << "::" << rows[i]->name;
+      EXPECT_TRUE(names.insert(rows[i]->name).second) << type << "::" << rows[i]->name;
+      EXPECT_TRUE(uppers.insert(rows[i]->upper).second) << type << "::" << rows[i]->upper;
+      EXPECT_TRUE(constants.insert(rows[i]->constant).second) << rows[i]->constant;
+      EXPECT_EQ(std::string(rows[i]->constant).rfind("HANDSIM_", 0), 0u) << rows[i]->constant;
+    }
+  }
+  // The value issue 21 found missing from every binding.
+  EXPECT_EQ(int(EventReason::HandRemoved), 4);
+  EXPECT_EQ(by_type["EventReason"].back()->constant, std::string("HANDSIM_REASON_HAND_REMOVED"));
+}
+
+// Every mirrored def has rows (the field count itself is a static_assert in core/src/tables.cpp).
+TEST(Tables, EveryMirroredDefHasRows) {
+  for (const MirroredDef& def : kMirroredDefs) {
+    int rows = 0;
+    for (const DefField& field : kDefFields) rows += std::string(field.def) == def.def;
+    EXPECT_GT(rows, 0) << def.def;
+  }
+  int world_rows = 0;
+  for (const DefField& field : kDefFields) world_rows += std::string(field.def) == "WorldDef";
+  EXPECT_EQ(world_rows, 12);  // paper_pipeline and render_threads included, which the C struct once lacked
 }

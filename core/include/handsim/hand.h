@@ -11,7 +11,7 @@
 
 namespace handsim {
 
-enum class Handedness : int { Left = 0, Right = 1 };
+HANDSIM_DECLARE_ENUM(Handedness, HANDSIM_ENUM_HANDEDNESS);
 
 // OpenXR XR_EXT_hand_tracking joint order. The thumb has no intermediate joint.
 enum HandJoint : int {
@@ -44,10 +44,7 @@ struct HandFrame {
   Pose palm_pose() const { return {joints[kPalm].position, joints[kPalm].orientation}; }
 };
 
-enum class ParticleSampling : int {
-  Random = 0,  // the paper: seeded uniform choice among the mesh vertices
-  Even = 1,    // farthest-point sampling: even coverage, smaller largest gap
-};
+HANDSIM_DECLARE_ENUM(ParticleSampling, HANDSIM_ENUM_PARTICLE_SAMPLING);
 
 struct HandDef {
   Handedness handedness = Handedness::Right;

@@ -11,26 +11,10 @@
 
 namespace handsim {
 
-// How the micro-simulator (Kim & Park, Sec. III-A, eq. 4) finds the joint coordinate.
-enum class JointSolver : int {
-  Exact = 0,    // closed form (default): O(1) per solve from precomputed vertex moments
-  Lm = 1,       // Levenberg-Marquardt over the vertices, Eigen, no Ceres needed
-  LmCeres = 2,  // the paper's mode: Ceres Levenberg-Marquardt; needs HANDSIM_WITH_CERES
-};
-
-// How the world keeps the joint together.
-enum class JointModel : int {
-  Hard = 0,  // reduced coordinates through the micro-simulator (default): never drifts apart
-  Soft = 1,  // Bullet btHingeConstraint & co. baseline: may stretch under large hand forces
-};
-
-// How the micro-simulator's last solve ended.
-enum class JointTermination : int {
-  Converged = 0,      // exact: the unconstrained optimum was inside the limits; LM: step/gradient tolerance
-  MaxIterations = 1,  // LM ran out of iterations; value is the last accepted iterate
-  Degenerate = 2,     // the cost does not depend on the coordinate (enough): value is the previous one
-  AtLimit = 3,        // the result sits on a limit because the optimum lies beyond it
-};
+// The values and what they mean: handsim/enum_table.h.
+HANDSIM_DECLARE_ENUM(JointSolver, HANDSIM_ENUM_JOINT_SOLVER);
+HANDSIM_DECLARE_ENUM(JointModel, HANDSIM_ENUM_JOINT_MODEL);
+HANDSIM_DECLARE_ENUM(JointTermination, HANDSIM_ENUM_JOINT_TERMINATION);
 
 constexpr double kUnlimited = std::numeric_limits<double>::infinity();
 

@@ -7,7 +7,7 @@
 
 namespace handsim {
 
-enum class ShapeType : int { Box = 0, Sphere = 1, Capsule = 2, ConvexHull = 3, TriangleMesh = 4 };
+HANDSIM_DECLARE_ENUM(ShapeType, HANDSIM_ENUM_SHAPE_TYPE);
 
 struct ShapeDef {
   ShapeType type = ShapeType::Box;

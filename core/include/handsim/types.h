@@ -3,6 +3,8 @@
 // (Eigen::Quaterniond::coeffs() already uses that order).
 #pragma once
 
+#include "handsim/enum_table.h"
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -51,15 +53,14 @@ using BodyId = Id<struct BodyTag>;
 using JointId = Id<struct JointTag>;
 using HandId = Id<struct HandTag>;
 
-// Status codes are shared by the C ABI; keep the numbers stable.
-enum class Status : int {
-  Ok = 0,
-  InvalidArgument = 1,  // a value is out of its domain (NaN, negative size, bad shape, ...)
-  StaleId = 2,          // an id names a removed object or comes from another world
-  InvalidState = 3,     // the call is not allowed now (e.g. removing a body a joint still uses)
-  Unsupported = 4,      // the build lacks the feature (e.g. Ceres solver without HANDSIM_WITH_CERES)
-  Internal = 5,         // a bug: an invariant broke; the message says which
-};
+// The public enums are declared from handsim/enum_table.h, one row per value, so C++, Python, C and C# share
+// one list (see that file). HANDSIM_DECLARE_ENUM(Name, ROWS) declares `enum class Name : int`.
+#define HANDSIM_ENUMERATOR(Enum, Value, number, UPPER, C_CONSTANT) Value = number,
+#define HANDSIM_DECLARE_ENUM(Name, ROWS) enum class Name : int { ROWS(HANDSIM_ENUMERATOR) }
+// (handsim/tables.h lists the rows at run time.)
+
+// Status codes are shared by the C ABI.
+HANDSIM_DECLARE_ENUM(Status, HANDSIM_ENUM_STATUS);
 
 // Every public function that rejects its input throws this. `argument` names the offending parameter,
 // and what() starts with it, so a message reads "dt: must be finite and > 0, got -1".

@@ -14,6 +14,8 @@
 
 namespace handsim {
 
+HANDSIM_DECLARE_ENUM(ParticleContacts, HANDSIM_ENUM_PARTICLE_CONTACTS);
+
 struct WorldDef {
   Vec3 gravity = Vec3(0, -9.81, 0);
   // Physics runs at a fixed substep so results do not depend on the caller's frame rate; a frame's dt is
@@ -32,8 +34,8 @@ struct WorldDef {
   GraspSettings grasp;
   // Hand particles against objects: the core's closed-form narrow phase (default), or one Bullet collision
   // object per particle as in the paper (a baseline for benchmarks; same contacts, ~100x the cost).
-  enum class ParticleContacts : int { ClosedForm = 0, BulletObjects = 1 } particle_contacts =
-      ParticleContacts::ClosedForm;
+  using ParticleContacts = handsim::ParticleContacts;
+  ParticleContacts particle_contacts = ParticleContacts::ClosedForm;
   // The paper's pipeline, as a baseline for benchmarks: every stage runs every step whether the scene needs
   // it or not (no bounds culling of hand-body pairs, render mesh skinned every step, hard joints solved with
   // Ceres LM when built with Ceres). Combine with ParticleContacts::BulletObjects for the full paper mode.
@@ -55,7 +57,7 @@ struct BodyDef {
   bool kinematic = false;  // moved only by set_body_pose / the hand, never by forces
 };
 
-enum class BodyMotion : int { Static = 0, Dynamic = 1, Kinematic = 2 };
+HANDSIM_DECLARE_ENUM(BodyMotion, HANDSIM_ENUM_BODY_MOTION);
 
 // Who holds a body. The primary hand moves it (pose = palm pose * relative pose); a secondary hand on the
 // same body has its relative pose re-taken every frame (eq. 5), so it slides instead of fighting.
@@ -66,8 +68,8 @@ struct GraspInfo {
   Pose primary_relative;  // body pose in the primary hand's palm frame
 };
 
-enum class EventType : int { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 };
-enum class EventReason : int { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 };
+HANDSIM_DECLARE_ENUM(EventType, HANDSIM_ENUM_EVENT_TYPE);
+HANDSIM_DECLARE_ENUM(EventReason, HANDSIM_ENUM_EVENT_REASON);
 
 // Events of the last step, pulled after it (no callbacks). Events raised by remove_body / remove_hand
 // between steps are listed at once and stay listed through the next step.
@@ -78,7 +80,7 @@ struct Event {
   EventReason reason = EventReason::None;  // GraspEnd only
 };
 
-enum class JointType : int { Hinge = 0, Slider = 1, Ball = 2, Fixed = 3 };
+HANDSIM_DECLARE_ENUM(JointType, HANDSIM_ENUM_JOINT_TYPE);
 
 // One joint after the last step.
 struct JointState {
