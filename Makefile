@@ -14,10 +14,10 @@ wheel:
 	scripts/setup && scripts/wheel
 
 bench:
-	scripts/setup && scripts/build && .venv/bin/python -m handsim.bench all
+	scripts/setup && scripts/build && .venv/bin/python -m handsim.bench all --doc docs --assets ../shared/assets/leap_recordings
 
 experiments:
-	scripts/setup && scripts/build && .venv/bin/python -m handsim.experiments
+	scripts/setup && scripts/build && .venv/bin/python -m handsim.experiments --docs docs
 
 # dist/handsim-plugin-<os>-<arch>/: the native plugin without Ceres, for C, C#/Unity and Godot (docs/native.md).
 plugin:

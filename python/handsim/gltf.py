@@ -153,7 +153,7 @@ class _Reader:
         return self._global[index]
 
 
-_quat_matrix = _skeleton.quat_matrix
+from .quat import quat_matrix as _quat_matrix  # noqa: E402
 _unit = _skeleton.unit
 _orientation = _skeleton.orientation
 

@@ -1,5 +1,7 @@
-"""Replays every Leap recording of a folder near the jewelry box and a free cube and writes the results of
-``docs/input.md``: ``python -m handsim.input_report [--assets DIR] [--doc docs/input.md] [--img docs/img]``.
+"""Replays every Leap recording of a folder near the jewelry box and a free cube and prints the results of
+``docs/input.md``: ``python -m handsim.input_report --assets DIR [--doc docs/input.md] [--img docs/img]``
+(``--assets ../shared/assets/leap_recordings`` for the 12 recordings the docs use; files are written only where
+``--doc`` and ``--img`` say).
 
 For each recording it runs :func:`handsim.replay.session_from_motion` on both scenes (60 Hz, the placement
 rule of :mod:`handsim.replay`), checks the expectations of :func:`expectations`, draws one PNG (key frames of
@@ -27,11 +29,6 @@ from .adapters.leap import fit_side, read_leap_document, read_leap_json, without
 BEGIN, END = "<!-- results begin -->", "<!-- results end -->"
 HINGE_TOLERANCE_M = 1e-6
 SAME_HAND_M = 0.02  # a rebuilt hand of a side with its palm this near the skeleton's is that hand (the rebuild's palm error is 4 mm at most)
-
-
-def default_assets() -> Path:
-    """``<repo>/../shared/assets/leap_recordings`` (the folder may be absent)."""
-    return Path(__file__).resolve().parents[3] / "shared" / "assets" / "leap_recordings"
 
 
 def expectations(motion: "_replay.Motion", jewelry: "_replay.Summary", free: "_replay.Summary") -> Dict[str, bool]:
@@ -247,9 +244,10 @@ def rebuild_table(rows) -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m handsim.input_report", description=__doc__.split("\n\n")[0])
-    ap.add_argument("--assets", type=Path, default=default_assets(), help="folder of .json.lz recordings")
-    ap.add_argument("--doc", type=Path, default=Path("docs/input.md"), help="doc whose results table to rewrite")
-    ap.add_argument("--img", type=Path, default=Path("docs/img"), help="folder for the PNGs")
+    ap.add_argument("--assets", type=Path, required=True,
+                    help="folder of .json.lz recordings (the docs use ../shared/assets/leap_recordings)")
+    ap.add_argument("--doc", type=Path, default=None, help="doc whose results table to rewrite (none: print only)")
+    ap.add_argument("--img", type=Path, default=None, help="folder for the PNGs (none: no pictures)")
     ap.add_argument("--reach", type=float, default=_replay.REACH,
                     help=f"placement: the share of the cube's half extent the closing hand is to reach into it "
                          f"(default {_replay.REACH}); another value prints the table only (a sensitivity run)")
@@ -276,8 +274,8 @@ def main(argv=None) -> int:
              f"{time.perf_counter() - c0:.0f} s wall for the whole run.")
     print(text)
     if sensitivity:
-        print(f"--reach {args.reach}: {args.doc} and the pictures are left as they are")
-    elif args.doc.is_file():
+        print(f"--reach {args.reach}: the doc and the pictures are left as they are")
+    elif args.doc is not None and args.doc.is_file():
         doc = args.doc.read_text()
         if BEGIN in doc and END in doc:
             a, b = doc.index(BEGIN) + len(BEGIN), doc.index(END)

@@ -962,19 +962,11 @@ def write_doc(path: Path, lines: List[str], seconds: float):
 
 # --- CLI ------------------------------------------------------------------------------------------------
 
-def default_folder() -> Optional[Path]:
-    here = Path(__file__).resolve()
-    for up in here.parents:
-        c = up.parent / "shared" / "assets" / "leap_recordings"
-        if c.is_dir():
-            return c
-    return None
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m handsim.intent", description=__doc__.split("\n\n")[0])
     ap.add_argument("paths", nargs="*", type=Path,
-                    help="recordings or folders of them (default: ../shared/assets/leap_recordings)")
+                    help="recordings or folders of them (the docs use ../shared/assets/leap_recordings; "
+                         "none are looked for elsewhere)")
     ap.add_argument("--rule", action="append",
                     help="grasp settings to judge: default, paper, or NAME:field=value,... (repeat to compare)")
     ap.add_argument("--sweep-frames", type=int, default=SWEEP_FRAMES,
@@ -987,9 +979,9 @@ def main(argv=None) -> int:
         rules = dict(parse_rule(s) for s in (args.rule or ["default"]))
         if args.sweep_frames < 1:
             raise ValueError(f"--sweep-frames: expected at least 1, got {args.sweep_frames}")
-        paths = args.paths or ([default_folder()] if default_folder() else [])
+        paths = args.paths
         if not paths:
-            raise FileNotFoundError("paths: none given and ../shared/assets/leap_recordings is not there")
+            raise FileNotFoundError("paths: none given (e.g. ../shared/assets/leap_recordings)")
         files = recordings(paths)
         if args.doc is not None and not (args.doc.is_file() and DOC_BEGIN in args.doc.read_text()):
             raise ValueError(f"--doc: {args.doc} is not a file with the {DOC_BEGIN} ... {DOC_END} markers")

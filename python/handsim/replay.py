@@ -50,6 +50,7 @@ from . import render as _render
 from . import scenes as _scenes
 from .plots import save_figure
 from .adapters import skeleton as _sk
+from .adapters.motion import HANDS, Motion, with_strengths  # noqa: F401 (part of this module's API)
 
 DT = 1.0 / 60.0
 DIP = 0.01
@@ -63,7 +64,6 @@ REACH = 0.5        # the closing hand is to reach this share of the cube's half 
 THUMB_ANVIL = (_core.THUMB_PROXIMAL, _core.THUMB_DISTAL, _core.THUMB_TIP)
 PALM_JOINTS = (_core.PALM, _core.WRIST, _core.INDEX_METACARPAL, _core.MIDDLE_METACARPAL, _core.RING_METACARPAL,
                _core.LITTLE_METACARPAL)
-HANDS = ("right", "left")
 
 
 def _default_lid_front():
@@ -72,49 +72,8 @@ def _default_lid_front():
     return np.asarray(box.lid_front(w), float)
 
 
-@dataclasses.dataclass
-class Motion:
-    """Tracker-neutral input: times (N,) s and per frame {"right"/"left": AdaptedFrame}; closure (N, 2) of
-    [right, left] with grab/pinch strengths when the tracker gives them (NaN otherwise)."""
-    name: str
-    times: np.ndarray
-    frames: List[Dict[str, _sk.AdaptedFrame]]
-    grab: Optional[np.ndarray] = None
-    pinch: Optional[np.ndarray] = None
-    source: str = ""
-    # what the adapter had to make up, {case: count} (adapters.leap.LeapRecording.notes)
-    notes: Dict[str, int] = dataclasses.field(default_factory=dict)
-
-    def palms(self, side=None):
-        return np.array([f[s].frame.palm_pose[:3] for f in self.frames for s in HANDS
-                         if s in f and (side is None or s == side) and f[s].frame.tracked])
-
-
 def motion_from_leap(leap) -> Motion:
     return with_strengths(Motion(leap.name, leap.times, leap.frames, leap.grab, leap.pinch, "leap", dict(leap.notes)))
-
-
-def with_strengths(motion: Motion) -> Motion:
-    """`motion` with grab and pinch strengths from the skeleton (:func:`skeleton.closure_strengths`) for each
-    hand the tracker gave none for (BVH, Leap before 2.0), so that the closing hand and the expectations of a
-    replay do not depend on which tracker recorded it; its source then says so."""
-    n = len(motion.frames)
-    grab = np.full((n, 2), np.nan) if motion.grab is None else np.array(motion.grab, float)
-    pinch = np.full((n, 2), np.nan) if motion.pinch is None else np.array(motion.pinch, float)
-    derived = []
-    for col, side in enumerate(HANDS):
-        if not (np.all(np.isnan(grab[:, col])) and np.all(np.isnan(pinch[:, col]))):
-            continue
-        seen = [i for i, f in enumerate(motion.frames) if side in f and f[side].frame.tracked]
-        for i in seen:
-            grab[i, col], pinch[i, col] = _sk.closure_strengths(motion.frames[i][side].frame)
-        if seen:
-            derived.append(side)
-    if not derived:
-        return motion
-    return dataclasses.replace(motion, grab=grab, pinch=pinch,
-                               source=f"{motion.source} (grab and pinch of the {' and '.join(derived)} hand "
-                                      f"from the skeleton)")
 
 
 def closing_hand(motion: Motion):

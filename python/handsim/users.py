@@ -31,33 +31,10 @@ from typing import List, Optional, Tuple
 import numpy as np
 
 from . import _core as _h
+from .quat import axis_angle, quat_mul, quat_rotate
 
 # ---------------------------------------------------------------------------------------------------------
-# Small pose helpers (quaternions x, y, z, w as everywhere in handsim).
-
-
-def quat_mul(a, b):
-    ax, ay, az, aw = (float(v) for v in a)
-    bx, by, bz, bw = (float(v) for v in b)
-    return np.array([aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw,
-                     aw * bw - ax * bx - ay * by - az * bz])
-
-
-def quat_rotate(q, v):
-    """v rotated by the unit quaternion q (plain float arithmetic: called a few times per frame)."""
-    x, y, z, w = (float(c) for c in q)
-    vx, vy, vz = (float(c) for c in v)
-    tx, ty, tz = 2 * (y * vz - z * vy), 2 * (z * vx - x * vz), 2 * (x * vy - y * vx)
-    return np.array([vx + w * tx + (y * tz - z * ty), vy + w * ty + (z * tx - x * tz), vz + w * tz + (x * ty - y * tx)])
-
-
-def axis_angle(axis, angle):
-    ax, ay, az = (float(c) for c in axis)
-    n = math.sqrt(ax * ax + ay * ay + az * az)
-    s = math.sin(0.5 * angle) / n
-    return np.array([ax * s, ay * s, az * s, math.cos(0.5 * angle)])
+# Small pose helpers (quaternions x, y, z, w as everywhere in handsim; the quaternion algebra is handsim.quat).
 
 
 def swing_pose(pose, pivot, axis, angle):
@@ -85,29 +62,29 @@ def lerp_pose(a, b, s):
 
 
 # ---------------------------------------------------------------------------------------------------------
-# Hand shapes (make_hand_frame parameters) of the styles.
+# Hand shapes of the styles: make_hand_frame parameters (HandShape, not handsim.Shape, the collision shape).
 
 @dataclasses.dataclass(frozen=True)
-class Shape:
+class HandShape:
     curl: Tuple[float, float, float, float, float] = (0, 0, 0, 0, 0)
     thumb_opposition: float = 0.0
     spread: float = 0.0
 
-    def blend(self, other: "Shape", s: float) -> "Shape":
-        return Shape(tuple((1 - s) * a + s * b for a, b in zip(self.curl, other.curl)),
+    def blend(self, other: "HandShape", s: float) -> "HandShape":
+        return HandShape(tuple((1 - s) * a + s * b for a, b in zip(self.curl, other.curl)),
                      (1 - s) * self.thumb_opposition + s * other.thumb_opposition,
                      (1 - s) * self.spread + s * other.spread)
 
 
-OPEN_HAND = Shape(spread=0.3)
-FLAT_HAND = Shape()
+OPEN_HAND = HandShape(spread=0.3)
+FLAT_HAND = HandShape()
 # The scene's lid_pinch_shape(): fingers straight on the lid, thumb half opposed under the lip.
-THUMB_UNDER = Shape(thumb_opposition=0.5)
+THUMB_UNDER = HandShape(thumb_opposition=0.5)
 # Thumb bent and pressed harder up under the lip, fingers straight on the lid (bent fingers would poke
 # through the 1.5 cm lid into the base).
-PINCH = Shape(curl=(0.2, 0.0, 0.0, 0.0, 0.0), thumb_opposition=0.6)
+PINCH = HandShape(curl=(0.2, 0.0, 0.0, 0.0, 0.0), thumb_opposition=0.6)
 # The left hand holding the base's left end (see BASE_HOLD_* below).
-BASE_HOLD = Shape(curl=(0.18, 0.6, 0.6, 0.6, 0.6), thumb_opposition=0.5)
+BASE_HOLD = HandShape(curl=(0.18, 0.6, 0.6, 0.6, 0.6), thumb_opposition=0.5)
 
 GRASP_SHAPES = {"pinch": PINCH, "thumb_under": THUMB_UNDER, "carry": THUMB_UNDER, "push": FLAT_HAND}
 
@@ -201,7 +178,7 @@ class Glove:
     def tracked(self, t: float) -> bool:
         return not any(start <= t < start + length for start, length in self.dropouts)
 
-    def frame(self, t: float, palm, shape: Shape):
+    def frame(self, t: float, palm, shape: HandShape):
         drift = self.fingers.step()
         palm_off = self.palm.step()
         yaw = float(self.yaw.step()[0])

@@ -827,6 +827,9 @@ def test_input_report_arguments(tmp_path, capsys):
     (tmp_path / "x.json.lz").write_text("{}")
     assert input_report.main(["--assets", str(tmp_path), "--reach", "0"]) == 2
     assert "--reach: expected a share in (0, 2]" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # the recordings are never looked for in a default place
+        input_report.main([])
+    assert "--assets" in capsys.readouterr().err
 
 
 def test_a_leap_recording_without_any_hand_replays_and_grasps_nothing():

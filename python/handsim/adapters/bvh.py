@@ -34,6 +34,7 @@ import numpy as np
 
 from .. import _core
 from . import _args
+from .motion import Motion, with_strengths
 from .skeleton import JOINT, AdaptedFrame, adapted_frame, quat_matrix
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
@@ -269,7 +270,6 @@ def load_bvh(path) -> Bvh:
 
 def load_bvh_motion(path, scale: float = 0.01):
     """A :class:`handsim.replay.Motion` with every hand the BVH file has (Perception Neuron names)."""
-    from ..replay import Motion, with_strengths
     bvh = load_bvh(path)
     hands = {}
     for side, h in (("right", _core.Handedness.RIGHT), ("left", _core.Handedness.LEFT)):

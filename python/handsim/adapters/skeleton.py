@@ -24,6 +24,7 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from .. import _core
+from ..quat import matrix_quat, quat_matrix  # noqa: F401 (adapters use them from here)
 
 JOINT = {name: i for i, name in enumerate(_core.JOINT_NAMES)}
 FINGERS = ("index", "middle", "ring", "little")
@@ -45,33 +46,6 @@ def chain(finger: str):
     """OpenXR joint indices of a finger from its first joint (metacarpal) to its tip."""
     first = JOINT[finger + "_metacarpal"]
     return list(range(first, JOINT[finger + "_tip"] + 1))
-
-
-def quat_matrix(q):
-    """3x3 rotation matrix of the quaternion q (x, y, z, w; normalised first)."""
-    x, y, z, w = np.asarray(q, float) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
-def matrix_quat(m):
-    """x, y, z, w of a rotation matrix (Shepperd's method, stable for every rotation)."""
-    t = np.trace(m)
-    if t > 0:
-        s = 2 * np.sqrt(t + 1)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2 * np.sqrt(1 + m[i, i] - m[j, j] - m[k, k])
-        q = [0.0] * 4
-        q[i] = s / 4
-        q[j] = (m[j, i] + m[i, j]) / s
-        q[k] = (m[k, i] + m[i, k]) / s
-        q[3] = (m[k, j] - m[j, k]) / s
-    q = np.array(q)
-    return q / np.linalg.norm(q)
 
 
 def cross(a, b):

@@ -27,13 +27,13 @@ def format_table(headers, rows):
     return "\n".join([line(headers), line(["-" * w for w in widths])] + [line(r) for r in rows])
 
 
-def write_doc(root: Path, doc: str, image: str, plot, text: str, result):
-    """Writes docs/img/<image> with plot(result, path) and docs/<doc> with `text`: the two files every
-    benchmark report regenerates together."""
-    img = Path(root) / "docs" / "img" / image
+def write_doc(docs: Path, doc: str, image: str, plot, text: str, result):
+    """Writes <docs>/img/<image> with plot(result, path) and <docs>/<doc> with `text`: the two files every
+    benchmark report regenerates together. `docs` is the caller's --doc folder: nothing is written without one."""
+    img = Path(docs) / "img" / image
     img.parent.mkdir(parents=True, exist_ok=True)
     plot(result, img)
-    (Path(root) / "docs" / doc).write_text(text)
+    (Path(docs) / doc).write_text(text)
 
 
 def _section_bounds(text: str, name: str):

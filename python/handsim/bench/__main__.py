@@ -1,13 +1,16 @@
-"""One entry point for every benchmark: ``python -m handsim.bench NAME [--json] [--quick]``.
+"""One entry point for every benchmark: ``python -m handsim.bench NAME [--json] [--quick] [--doc DIR] [--assets DIR]``.
 
-Each benchmark module in this package defines ``run(quick: bool) -> dict`` (the JSON document) and
-``table(result: dict) -> str`` (the human table). ``all`` runs every registered benchmark.
+Each benchmark module in this package defines ``run(quick: bool, ...) -> dict`` (the JSON document) and
+``table(result: dict) -> str`` (the human table). ``all`` runs every registered benchmark. Benchmarks write files
+only into the folder given with ``--doc`` (``--doc docs`` regenerates the repo's pages and plots) and read the Leap
+recordings only from ``--assets``.
 """
 import argparse
 import importlib
 import inspect
 import json
 import sys
+from pathlib import Path
 
 BENCHMARKS = {
     "hand": "handsim.bench.hand",
@@ -30,9 +33,13 @@ def main(argv=None):
                         help="benchmarks that sweep (particles, sweeps): run the jobs on Ray, a local Ray "
                              "without ADDRESS")
     parser.add_argument("--workers", type=int, default=1, help="local processes (or local Ray CPUs) for --ray")
-    parser.add_argument("--doc", default=None, metavar="PATH",
-                        help="benchmarks with a report of their own (peers, sweeps): write it to PATH")
+    parser.add_argument("--doc", type=Path, default=None, metavar="DIR",
+                        help="folder of the report pages and plots to write (e.g. docs); none: write nothing")
+    parser.add_argument("--assets", type=Path, default=None,
+                        help="folder of Leap .json.lz recordings for the particle study's behaviour gate")
     args = parser.parse_args(argv)
+    if args.doc is not None and not args.doc.is_dir():
+        parser.error(f"--doc: {args.doc} is not a folder")
     names = sorted(BENCHMARKS) if args.name == "all" else [args.name]
     results = {}
     for name in names:
@@ -46,6 +53,10 @@ def main(argv=None):
             kwargs["ray"] = args.ray
         if "workers" in params:
             kwargs["workers"] = args.workers
+        if "doc" in params:
+            kwargs["doc"] = args.doc
+        if "assets" in params:
+            kwargs["assets"] = args.assets
         results[name] = module.run(quick=args.quick, **kwargs)
         if args.doc and hasattr(module, "write_doc"):
             module.write_doc(results[name], args.doc)

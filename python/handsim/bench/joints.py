@@ -21,6 +21,7 @@ from handsim._core import solvers
 
 from . import format_table
 from ..plots import save_figure
+from ..quat import axis_angle, quat_mul, quat_rotate
 
 SEED = 20240607
 WRONG_RAD = 0.01  # an answer this far from the reference is a wrong answer
@@ -57,24 +58,7 @@ def solver_list():
     return [name for name in SOLVER_NAMES if name != "lm_ceres" or handsim.WITH_CERES]
 
 
-# --- quaternions (x, y, z, w) ------------------------------------------------------------------------
-
-def quat_mul(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return np.array([aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz])
-
-
-def quat_rotate(q, v):
-    u, w = q[:3], q[3]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
-
-
-def axis_angle(axis, angle):
-    return np.concatenate([np.asarray(axis) * math.sin(0.5 * angle), [math.cos(0.5 * angle)]])
-
+# --- random geometry (quaternions x, y, z, w; the algebra is handsim.quat) ----------------------------------
 
 def random_unit(rng):
     v = rng.normal(size=3)
@@ -362,7 +346,7 @@ def strip_series(groups):
 
 # --- entry points ------------------------------------------------------------------------------------
 
-def run(quick=False):
+def run(quick=False, doc=None):
     ns = (8, 64, 1182) if quick else (8, 64, 1182, 39225)
     load_before = _load()
     rows, guard, far = run_solves(ns, k=6 if quick else 24, repeats=3 if quick else 5)
@@ -371,8 +355,8 @@ def run(quick=False):
               # the box's default 0.5 kg base, free on the table: what the pull does to the whole group
               "groups_dynamic_base": strip_series(run_groups(JEWELRY_BASE_MASS)),
               "machine": _machine(), "cpu_count": os.cpu_count(), "load_average": [load_before, _load()]}
-    if not quick:
-        write_report(result)
+    if doc is not None:
+        write_report(result, docs=doc)
     return result
 
 
@@ -531,16 +515,12 @@ def plot_groups(result, path):
     save_figure(fig, path, dpi=110)
 
 
-COMMAND = ".venv/bin/python -m handsim.bench joints"
+COMMAND = ".venv/bin/python -m handsim.bench joints --doc docs"
 
 
-def write_report(result, docs=None, command=COMMAND):
-    """docs/img/joints_*.png and docs/joints.md from one result. Skipped (with a note on stderr) when the
-    package does not sit in a source checkout."""
-    docs = Path(docs) if docs else Path(__file__).resolve().parents[3] / "docs"
-    if not docs.is_dir():
-        print(f"joints: no {docs} directory (not a source checkout); report not written", file=sys.stderr)
-        return
+def write_report(result, docs, command=COMMAND):
+    """<docs>/img/joints_*.png and <docs>/joints.md from one result (`docs`: the caller's --doc folder)."""
+    docs = Path(docs)
     figures = {"solves": docs / "img" / "joints_error_vs_time.png", "groups": docs / "img" / "joints_groups.png"}
     plot(result, figures["solves"])
     plot_groups(result, figures["groups"])

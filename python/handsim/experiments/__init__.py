@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import _core as _h
 from .. import users as _users
+from ..quat import quat_rotate
 
 METHODS = ("exact", "paper", "soft")
 THRESHOLDS = (-0.7, 0.7)
@@ -179,7 +180,7 @@ class Bench:
                 break
         base = np.asarray(w.body_pose(box.base), float)
         shift = float(np.hypot(base[0] - base0[0], base[2] - base0[2]))
-        up = _users.quat_rotate(base[3:], [0, 1, 0])
+        up = quat_rotate(base[3:], [0, 1, 0])
         tilt = math.acos(max(-1.0, min(1.0, float(up[1]))))
         on_table = base[1] > table_top
         knocked = shift > MAX_SHIFT_M or tilt > MAX_TILT or not on_table

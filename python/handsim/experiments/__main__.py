@@ -1,8 +1,9 @@
 """python -m handsim.experiments [--trials N] [--json] [--quick] [--workers W] [--ray [ADDRESS]] [--docs DIR]
 
-Runs the jewelry-box experiments and regenerates DIR/experiments.md (default docs/) and DIR/img/*.png.
---quick runs 10 trials per cell (1 paper cross-check user per cell) and writes to out/experiments-quick/ instead (docs stay as they are).
---json prints {"conditions": [...]} on stdout (the report is still written).
+Runs the jewelry-box experiments and prints one line per condition; with --docs DIR it also writes
+DIR/experiments.md and DIR/img/*.png (`--docs docs` regenerates the repo's page; nothing is written without it).
+--quick runs 10 trials per cell (1 paper cross-check user per cell).
+--json prints {"conditions": [...]} on stdout instead of the lines.
 --ray runs the trials as Ray tasks: on a local Ray (no ADDRESS; --workers CPUs) or on the cluster at ADDRESS;
 the results are the same as the local runner's, seed for seed.
 """
@@ -222,20 +223,18 @@ def main(argv=None):
     ap.add_argument("--paper-check", type=int, default=PAPER_CHECK,
                     help=f"users per paper cell replayed with the paper's full pipeline (default {PAPER_CHECK})")
     ap.add_argument("--json", action="store_true", help="print the conditions as JSON on stdout")
-    ap.add_argument("--quick", action="store_true", help="10 trials per cell, written to out/experiments-quick")
+    ap.add_argument("--quick", action="store_true", help="10 trials per cell")
     ap.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1), help="parallel processes")
     ap.add_argument("--ray", nargs="?", const="", default=False, metavar="ADDRESS",
                     help="run the trials on Ray: a local Ray without ADDRESS, else the cluster at ADDRESS")
-    ap.add_argument("--docs", default=None, help="where experiments.md and img/ go (default docs/)")
+    ap.add_argument("--docs", default=None, help="folder to write experiments.md and img/ into (none: write nothing)")
     args = ap.parse_args(argv)
     trials = 10 if args.quick else args.trials
     if trials < 1:
         ap.error("--trials must be >= 1")
-    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
-    docs = args.docs or os.path.join(root, "out", "experiments-quick" if args.quick else "docs")
-    if not args.docs and not args.quick:
-        docs = os.path.join(root, "docs")
-    os.makedirs(os.path.join(docs, "img"), exist_ok=True)
+    docs = args.docs
+    if docs is not None:
+        os.makedirs(os.path.join(docs, "img"), exist_ok=True)
     t0 = time.perf_counter()
     from ..runners import make_runner
     runner = make_runner(args.ray, args.workers)
@@ -244,15 +243,16 @@ def main(argv=None):
     check = paper_cross_check(results, n_check, runner=runner)
     seconds = time.perf_counter() - t0
     rows = summarize(results)
-    plots.success_rates(rows, os.path.join(docs, "img", "exp_success.png"))
-    plots.time_kde(results, os.path.join(docs, "img", "exp_time_kde.png"))
-    plots.traces(results, os.path.join(docs, "img", "exp_traces.png"))
-    command = "python -m handsim.experiments" + ("" if trials == DEFAULT_TRIALS and not args.quick else
-                                                 (" --quick" if args.quick else f" --trials {trials}"))
-    if args.paper_check != PAPER_CHECK:
-        command += f" --paper-check {args.paper_check}"
-    with open(os.path.join(docs, "experiments.md"), "w") as f:
-        f.write(report(rows, results, trials, check, seconds, command, runner.describe()))
+    if docs is not None:
+        plots.success_rates(rows, os.path.join(docs, "img", "exp_success.png"))
+        plots.time_kde(results, os.path.join(docs, "img", "exp_time_kde.png"))
+        plots.traces(results, os.path.join(docs, "img", "exp_traces.png"))
+        command = "python -m handsim.experiments --docs docs" + (
+            "" if trials == DEFAULT_TRIALS and not args.quick else (" --quick" if args.quick else f" --trials {trials}"))
+        if args.paper_check != PAPER_CHECK:
+            command += f" --paper-check {args.paper_check}"
+        with open(os.path.join(docs, "experiments.md"), "w") as f:
+            f.write(report(rows, results, trials, check, seconds, command, runner.describe()))
     if args.json:
         json.dump(json_rows(rows), sys.stdout, indent=1)
         print()
@@ -263,8 +263,8 @@ def main(argv=None):
                   f"{r['max_violation_m']:.1e} m  overshoot {r['max_overshoot_rad']:.1e} rad  false grasps "
                   f"{r['false_grasps']}  drops {r['drops']}")
         print(f"{len(results)} trials in {seconds:.0f} s on {runner.describe()} "
-              f"({len(results) / seconds / runner.cores():.2f} trials/s per core); "
-              f"report: {os.path.join(docs, 'experiments.md')}")
+              f"({len(results) / seconds / runner.cores():.2f} trials/s per core)"
+              + (f"; report: {os.path.join(docs, 'experiments.md')}" if docs is not None else ""))
     return 0
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import _core as _h
 from .. import users as _users
+from ..quat import quat_rotate
 
 R = _h.Handedness.RIGHT
 
@@ -34,7 +35,7 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
     for i in range(100):
         angle = min(max((i - 10) / 60, 0.0), 1.0) * math.radians(swing_deg)
         p = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
-        p[:3] += _users.quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
+        p[:3] += quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
         p = _users.swing_pose(p, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
         w.step(1 / 60, [_h.make_hand_frame(R, p, thumb_opposition=shape.thumb_opposition)])
         touching = max(touching, w.body_contact_count(box.base, hand))
