@@ -70,7 +70,9 @@ const handsim_world& checked(const handsim_world* world);
 // Caller buffers: sets *count = needed (count must not be null), and returns whether `out` should be filled:
 // false for a size query (out == NULL, capacity == 0); throws InvalidArgument naming `out_name` when out is
 // NULL with a capacity, or capacity < needed; `capacity` must be >= 0.
-bool output_buffer(const void* out, int32_t capacity, int32_t* count, size_t needed, const char* out_name);
+// count_name: the caller's name for the count argument ("length" for text), so its errors name it.
+bool output_buffer(const void* out, int32_t capacity, int32_t* count, size_t needed, const char* out_name,
+                   const char* count_name = "count");
 // Checks a count argument (>= 0) and its array (non-null when count > 0).
 void input_array(const void* array, int32_t count, const char* array_name, const char* count_name);
 

@@ -50,8 +50,9 @@ void rethrow_renamed(const Error& e, const std::string& from, const std::string&
   throw Error(e.status(), to + argument.substr(from.size()), message);
 }
 
-bool output_buffer(const void* out, int32_t capacity, int32_t* count, size_t needed, const char* out_name) {
-  int32_t& n = deref(count, "count");
+bool output_buffer(const void* out, int32_t capacity, int32_t* count, size_t needed, const char* out_name,
+                   const char* count_name) {
+  int32_t& n = deref(count, count_name);
   if (capacity < 0) validate::fail("capacity", "must be >= 0, got " + std::to_string(capacity));
   if (needed > size_t(INT32_MAX)) validate::fail(out_name, "the result does not fit an int32 count");
   n = int32_t(needed);
@@ -61,7 +62,7 @@ bool output_buffer(const void* out, int32_t capacity, int32_t* count, size_t nee
   }
   if (size_t(capacity) < needed)
     validate::fail(out_name, "capacity " + std::to_string(capacity) + " is too small, needs " +
-                                 std::to_string(needed) + " (see count)");
+                                 std::to_string(needed) + " (see " + count_name + ")");
   return true;
 }
 

@@ -99,7 +99,7 @@ HANDSIM_API int HANDSIM_CALL handsim_stage_summary(const handsim_world* world, c
                                                    int32_t* length) {
   return guarded([&] {
     const std::string text = checked(world).world.stage_summary();
-    if (output_buffer(out_text, capacity, length, text.size() + 1, "out_text"))
+    if (output_buffer(out_text, capacity, length, text.size() + 1, "out_text", "length"))
       std::memcpy(out_text, text.c_str(), text.size() + 1);
   });
 }

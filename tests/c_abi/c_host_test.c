@@ -444,6 +444,7 @@ static void test_bad_inputs(void) {
   REJECT(world, handsim_remove_body(world, stale), HANDSIM_STALE_ID, "body:");
   REJECT(world, handsim_remove_hand(world, box.lid), HANDSIM_STALE_ID, "hand:");
   REJECT(world, handsim_get_joint_state(world, box.lid, NULL), HANDSIM_INVALID_ARGUMENT, "out_state: must not be null");
+  REJECT(world, handsim_stage_summary(world, NULL, 0, NULL), HANDSIM_INVALID_ARGUMENT, "length: must not be null");
   REJECT(world, handsim_remove_joint(world, 12345), HANDSIM_STALE_ID, "joint:");
   {
     handsim_body_id two[2];
