@@ -65,9 +65,12 @@ done < <(find "$b" -type f -name '*.so*')
 echo "ldd lib/libhandsim.so.2:"
 ldd "$b/lib/libhandsim.so.2" | sed "s|$work/||; s| (0x[0-9a-f]*)||; s|^[[:space:]]*|  |" || true
 
-# 2. The C host test against include/ and lib/ (handsim_layout.inc, a test input, from the source tree).
+# 2. The C host test against include/ and lib/. Its own inputs come from the source tree, after the bundle's
+# include/ so that handsim.h is the bundle's: handsim_layout.inc, and the core's enum and def tables
+# (handsim/enum_table.h, def_table.h), which the test walks to check the C names against the core's.
 c_host() {
-  cc -std=c99 -O1 -I "$b/include" -I "$repo/bindings/c" "$repo/tests/c_abi/c_host_test.c" -o "$work/c_host" \
+  cc -std=c99 -O1 -I "$b/include" -I "$repo/bindings/c" -I "$repo/core/include" "$repo/tests/c_abi/c_host_test.c" \
+     -o "$work/c_host" \
      -L "$b/lib" -lhandsim -lm -Wl,-rpath,"$b/lib" &&
   "$work/c_host" "$work/hash_c.txt" "$expected_file" >"$work/c_host.log" 2>&1 &&
   [ "$(cat "$work/hash_c.txt")" = "$(cat "$expected_file")" ] || { tail -20 "$work/c_host.log" >&2; return 1; }
