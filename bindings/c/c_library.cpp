@@ -105,6 +105,14 @@ HANDSIM_API const char* HANDSIM_CALL handsim_status_name(int status) {
   return "Unknown";
 }
 
+namespace {
+// The row index of a table read one row per call (enum values, layouts): 0..count-1, named "index".
+void check_table_index(int32_t index, int32_t count) {
+  if (index < 0 || index >= count)
+    validate::fail("index", "must be in 0.." + std::to_string(count - 1) + ", got " + std::to_string(index));
+}
+}  // namespace
+
 HANDSIM_API int HANDSIM_CALL handsim_enum_count(int32_t* count) {
   return guarded([&] { deref(count, "count") = kEnumCount; });
 }
@@ -112,8 +120,7 @@ HANDSIM_API int HANDSIM_CALL handsim_enum_count(int32_t* count) {
 HANDSIM_API int HANDSIM_CALL handsim_enum_value(int32_t index, handsim_enum_entry* out_entry) {
   return guarded([&] {
     handsim_enum_entry& out = deref(out_entry, "out_entry");
-    if (index < 0 || index >= kEnumCount)
-      validate::fail("index", "must be in 0.." + std::to_string(kEnumCount - 1) + ", got " + std::to_string(index));
+    check_table_index(index, kEnumCount);
     const EnumValue& row = kEnumValues[index];
     out = {row.type, row.name, row.constant, row.value, 0};
   });
@@ -126,8 +133,7 @@ HANDSIM_API int HANDSIM_CALL handsim_layout_count(int32_t* count) {
 HANDSIM_API int HANDSIM_CALL handsim_layout(int32_t index, handsim_layout_entry* out_entry) {
   return guarded([&] {
     handsim_layout_entry& out = deref(out_entry, "out_entry");
-    if (index < 0 || index >= kLayoutCount)
-      validate::fail("index", "must be in 0.." + std::to_string(kLayoutCount - 1) + ", got " + std::to_string(index));
+    check_table_index(index, kLayoutCount);
     out = kLayout[index];
   });
 }
