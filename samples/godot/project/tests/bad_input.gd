@@ -1,20 +1,7 @@
-extends SceneTree
+extends "res://tests/checks.gd"
 # Bad input to HandsimWorld: every call must fail with a message naming the argument, never crash, and leave an
 # open session as it was. Run by run_godot.sh: godot3-server --path <project> --script res://tests/bad_input.gd
 # Prints "bad_input: N passed, M failed" and exits 1 on any failure.
-
-const HandsimWorld = preload("res://addons/handsim/handsim_world.gdns")
-
-var passed = 0
-var failed = 0
-
-
-func expect(condition, what):
-	if condition:
-		passed += 1
-	else:
-		failed += 1
-		printerr("FAIL: ", what)
 
 
 func expect_error(sim, result, bad_result, prefix, what):

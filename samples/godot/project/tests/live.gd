@@ -1,22 +1,9 @@
-extends SceneTree
+extends "res://tests/checks.gd"
 # HandsimWorld's live path: create(sides) + step(dt, frames), fed with the recorded session's frames through
 # recorded_frame() (Godot's float32 Vector3 and Quat, as a live tracker would give them). The hand must grasp the lid
 # once and open it to its 90-degree limit, as in the replay; the hash is printed but not compared (float32 inputs
 # are not the recording's doubles, so it need not be the same). Then bad frames: each must fail naming the argument and leave the world unchanged.
 # Run by run_godot.sh: godot3-server --path <project> --script res://tests/live.gd. Prints "live: N passed, M failed".
-
-const HandsimWorld = preload("res://addons/handsim/handsim_world.gdns")
-
-var passed = 0
-var failed = 0
-
-
-func expect(condition, what):
-	if condition:
-		passed += 1
-	else:
-		failed += 1
-		printerr("FAIL: ", what)
 
 
 func expect_error(sim, result, prefix, what):
