@@ -2,6 +2,7 @@
 #pragma once
 
 #include "handsim/hand.h"
+#include "pose_fit.h"
 
 #include <utility>
 #include <vector>
@@ -23,5 +24,26 @@ void collide_particle_ranges(const Eigen::Matrix3Xd& centres, const std::vector<
 // ask for a push of centimetres.
 bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double max_time, Vec3& normal,
                 double& offset);
+
+class HandMotionHistory;
+
+// A face plane in body coordinates: points x on it satisfy normal . x = offset; normal points out.
+struct EntryFace {
+  int particle = -1;
+  Vec3 normal = Vec3::UnitY();
+  double offset = 0;
+  bool crossing = false;  // the centre was inside, or is coming out on the far side (keep_entry_faces)
+  double depth = 0;       // the depth the face gave the contact
+};
+
+// Contact persistence through thin bodies (contacts.cpp says why): each contact of a particle that entered the
+// body through a face keeps that face while its centre is inside, or is coming out on the far side, and is
+// measured against it. `contacts` (sorted by particle) are rewritten in place; `faces` gets this step's face
+// of each, `previous` is last step's list of the same (hand, body) pair. `body` is the body's velocity and
+// `hand` the hand's motion history (for the motion relative to the body).
+void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& shape, const Pose& pose,
+                      const BodyVelocity& body, const HandMotionHistory& hand, double dt,
+                      const std::vector<EntryFace>& previous, std::vector<EntryFace>& faces,
+                      std::vector<ParticleContact>& contacts);
 
 }  // namespace handsim

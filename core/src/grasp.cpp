@@ -280,4 +280,19 @@ BodyVelocity HandMotionHistory::attached_body_velocity(const Vec3& centre_of_mas
   return {point_velocity(centre_of_mass), angular_velocity()};
 }
 
+int rigid_part(const HandModel& model, int p) {
+  int k = 0;
+  model.particle_weights.col(p).maxCoeff(&k);
+  const int bone = model.particle_bones(k, p);
+  switch (bone) {
+    case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal:
+    case kLittleMetacarpal:
+      return kPalm;
+    case kThumbTip: case kIndexTip: case kMiddleTip: case kRingTip: case kLittleTip:
+      return bone - 1;
+    default:
+      return bone;
+  }
+}
+
 }  // namespace handsim

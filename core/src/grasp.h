@@ -83,6 +83,12 @@ class GraspTracker {
   double untracked_s_ = 0;  // time since tracking was lost (Grasped)
 };
 
+// The rigid part of the hand particle p moves with (GraspSettings::across_parts): its most weighted bone, with
+// the palm, the wrist and the five metacarpals as one part (kPalm) and a tip as part of its distal bone. The
+// thumb's metacarpal (the ball of the thumb) counts as palm: a flat palm pressed 3-10 mm down onto a box
+// touched opposite faces with it and the palm; the thumb opposes with its phalanges.
+int rigid_part(const HandModel& model, int particle);
+
 // The grip span of a hand (m): the four fingertips' distances to the palm joint plus the thumb tip's distance
 // to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
 // pinch shortens it; moving or turning the hand as a whole does not change it.

@@ -4,6 +4,7 @@
 #include "handsim/world.h"
 
 #include "bullet_backend.h"
+#include "contacts.h"
 #include "grasp.h"
 #include "bullet_particles.h"
 #include "joint_solvers.h"
@@ -108,15 +109,6 @@ struct HandSlot {
   std::unique_ptr<BulletParticleCollider> bullet_particles;
   std::vector<uint32_t> bullet_bodies;  // body slot of each collider body
   uint64_t bullet_version = 0;
-};
-
-// A face plane in body coordinates: points x on it satisfy normal . x = offset; normal points out.
-struct EntryFace {
-  int particle = -1;
-  Vec3 normal = Vec3::UnitY();
-  double offset = 0;
-  bool crossing = false;  // the centre was inside, or is coming out on the far side (keep_entry_faces)
-  double depth = 0;       // the depth the face gave the contact
 };
 
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.

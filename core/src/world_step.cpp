@@ -247,80 +247,6 @@ void World::Impl::skin_render_mesh(HandSlot& h) {
   h.render_dirty = false;
 }
 
-namespace {
-
-// Contact persistence through thin bodies. The closed form answers with the *nearest* face, so a particle
-// pushed more than half-way into a 1.5 cm lid is answered with the far face and pushes the lid the wrong way
-// (the experiments saw a lid held past its limit slammed shut at 650 deg/s; recorded Leap fists closing on a
-// cube never grasped it, their fingertips answered with the far face). A particle keeps the face it entered through for as long as its
-// centre stays inside the body, and its contact is measured against that face's plane. The face is taken
-// afresh when the centre is outside (a finger sliding round an edge changes face legitimately); a
-// centre already inside at its first contact (a fast hand, a falling lid) takes the face it crossed, found
-// by going back along its velocity relative to the body. A particle whose centre has just come out on the far
-// side still keeps its entry face: it crossed the body, it did not come from there.
-// Two faces whose outward normals are further apart than this are on opposite sides of the body (a box's
-// adjacent faces are at 0, its opposite ones at -1).
-constexpr double kOppositeFaces = -0.5;
-// How many frames back along its relative velocity a first contact's crossing may lie (see entry_face).
-constexpr double kEntryFrames = 2.0;
-
-void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Body& body,
-                      const HandMotionHistory& hand, double dt, const std::vector<EntryFace>& previous,
-                      std::vector<EntryFace>& faces, std::vector<ParticleContact>& contacts) {
-  faces.clear();
-  if (contacts.empty()) return;
-  const Pose& pose = body.pose;
-  const Mat3 R = pose.orientation.normalized().toRotationMatrix();
-  // The hand's motion relative to the body, once per pair: the hand's velocity estimate is a least-squares
-  // slope over its history, too dear to evaluate per contact (hundreds on a pinched lid).
-  const BodyVelocity hand_at_body = hand.attached_body_velocity(pose.position);
-  const Vec3 dv = hand_at_body.linear - body.linear, dw = hand_at_body.angular - body.angular;
-  auto prev = previous.begin();
-  for (ParticleContact& c : contacts) {  // both lists are sorted by particle
-    while (prev != previous.end() && prev->particle < c.particle) ++prev;
-    const Vec3 x = centres.col(c.particle);
-    const Vec3 l = R.transpose() * (x - pose.position);
-    const bool inside = c.depth > radius;  // the centre is behind the surface
-    EntryFace face{c.particle, R.transpose() * c.normal, 0};
-    face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
-    const bool touched_before = prev != previous.end() && prev->particle == c.particle;
-    // Only the particles that may have crossed the body need their motion relative to it (most contacts of a
-    // held body are neither inside nor leaving, and skip this).
-    auto relative = [&] { return Vec3(dv + dw.cross(x - pose.position)); };
-    // How much deeper the entry face may say a particle coming out on the far side is than last frame: as far
-    // as it moved relative to the body in two frames (slack for the lag of the velocity estimate), plus a
-    // radius. More and it did not cross the body this frame (an 18 cm base, knocked spinning under the
-    // fingers of the experiments' left hand, was thrown 13 cm by two particles answered with its far face).
-    auto reach = [&] { return relative().norm() * kEntryFrames * dt + radius; };
-    bool replaced = false;
-    if (touched_before && (inside || (prev->crossing && prev->normal.dot(face.normal) < kOppositeFaces &&
-                                      radius - (prev->normal.dot(l) - prev->offset) <= prev->depth + reach()))) {
-      // Inside, or leaving through the far side: a particle that was inside (or leaving) last frame and is now
-      // nearest the face opposite the one it entered through, within its reach, has crossed the body, and
-      // answering it with that face would push the body back the way the hand came (a hand driven past a
-      // lid's stop flung the lid shut). One that only touched the near face from outside has not crossed
-      // anything.
-      face = *prev;
-      replaced = true;
-    } else if (inside && hand.has_velocity()) {
-      // A centre inside at its first contact crossed the surface within the last frame; two frames of slack
-      // for the lag of the velocity estimate (a 4-sample slope).
-      replaced = entry_face(body.prepared, l, R.transpose() * relative(), kEntryFrames * dt, face.normal, face.offset);
-    }
-    face.crossing = inside || replaced;
-    if (replaced) {
-      const double distance = face.normal.dot(l) - face.offset;  // < 0 behind the face
-      c.normal = R * face.normal;
-      c.point = R * (l - distance * face.normal) + pose.position;
-      c.depth = radius - distance;
-    }
-    face.depth = c.depth;
-    faces.push_back(face);
-  }
-}
-
-}  // namespace
-
 // --- line 3: detect hand collision and contact particles ---
 std::string World::Impl::detect_contacts(double dt) {
   for (auto& entry : pairs) {
@@ -381,7 +307,7 @@ std::string World::Impl::detect_contacts(double dt) {
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
       if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0, {}, {}}).first;
-      keep_entry_faces(h.state.tracked_positions, radius, b, h.history, dt, it->second.previous_faces,
+      keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
       touching += !it->second.contacts.empty();
@@ -470,35 +396,8 @@ std::string World::Impl::deform_hands() {
   return std::to_string(deformed) + " particle(s) pushed back to a surface";
 }
 
-namespace {
-
-}  // namespace
-
 // The span a hand must have closed by lately to begin a grasp; 0 (off) is met by any hand.
 double World::Impl::closing_needed() const { return def.grasp.closing_distance; }
-
-namespace {
-
-// The rigid part of the hand particle p moves with (GraspSettings::across_parts): its most weighted bone, with
-// the palm, the wrist and the five metacarpals as one part (kPalm) and a tip as part of its distal bone. The
-// thumb's metacarpal (the ball of the thumb) counts as palm: a flat palm pressed 3-10 mm down onto a box
-// touched opposite faces with it and the palm; the thumb opposes with its phalanges.
-int rigid_part(const HandModel& model, int p) {
-  int k = 0;
-  model.particle_weights.col(p).maxCoeff(&k);
-  const int bone = model.particle_bones(k, p);
-  switch (bone) {
-    case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal:
-    case kLittleMetacarpal:
-      return kPalm;
-    case kThumbTip: case kIndexTip: case kMiddleTip: case kRingTip: case kLittleTip:
-      return bone - 1;
-    default:
-      return bone;
-  }
-}
-
-}  // namespace
 
 // Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
 // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
