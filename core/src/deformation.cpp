@@ -136,15 +136,19 @@ void deform_particles(const HandModel& model, HandState& state, const std::vecto
 
 void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
                         const std::vector<ParticleContact>& contacts, std::vector<int>& displaced,
-                        std::vector<Vec3>& centres) {
+                        std::vector<Vec3>& centres, std::vector<std::pair<int, int>>* scratch) {
   const double r = model.particle_radius;
   // (particle, contact) for every contact whose centre is inside, stably by particle: each particle then adds
   // its corrections in contact order, as deform_particles does in its pass over the contacts.
-  std::vector<std::pair<int, int>> inside;
+  std::vector<std::pair<int, int>> local;
+  std::vector<std::pair<int, int>>& inside = scratch ? *scratch : local;
+  inside.clear();
   for (size_t c = 0; c < contacts.size(); ++c)
     if (contacts[c].depth > r) inside.push_back({contacts[c].particle, int(c)});
-  std::stable_sort(inside.begin(), inside.end(),
-                   [](const std::pair<int, int>& a, const std::pair<int, int>& b) { return a.first < b.first; });
+  auto by_particle = [](const std::pair<int, int>& a, const std::pair<int, int>& b) { return a.first < b.first; };
+  // One hand on one body gives them sorted already (contacts come sorted by particle): no sort, no buffer.
+  if (!std::is_sorted(inside.begin(), inside.end(), by_particle))
+    std::stable_sort(inside.begin(), inside.end(), by_particle);
   displaced.clear();
   centres.clear();
   for (size_t i = 0; i < inside.size();) {

@@ -13,10 +13,11 @@ namespace handsim {
 void build_falloff(HandModel& model);
 
 // deform_particles without the full matrix: the displaced particles (sorted) and their deformed centres,
-// with the same arithmetic (so the same bits) as deform_particles gives them.
+// with the same arithmetic (so the same bits) as deform_particles gives them. `scratch`, when given, is
+// working space kept by the caller (the step reuses it instead of allocating).
 void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
                         const std::vector<ParticleContact>& contacts, std::vector<int>& displaced,
-                        std::vector<Vec3>& centres);
+                        std::vector<Vec3>& centres, std::vector<std::pair<int, int>>* scratch = nullptr);
 
 // out.col(v) += sum over displaced particles p of w_vp * (deformed_p - tracked_p).
 void apply_render_deformation(const HandModel& model, const HandState& state, Eigen::Matrix3Xd& out);

@@ -25,14 +25,16 @@ void check_directions(const std::vector<Vec3>& d) {
 }
 
 // O(n): the extreme directions along an axis are the likeliest opposing pair; test it.
-bool extremes_oppose(const std::vector<Vec3>& d, const Vec3& axis, double c) {
+bool extremes_oppose(const std::vector<Vec3>& d, const Vec3& axis, double c, OpposingPair* pair) {
   size_t lo = 0, hi = 0;
   for (size_t i = 1; i < d.size(); ++i) {
     double s = d[i].dot(axis);
     if (s < d[lo].dot(axis)) lo = i;
     if (s > d[hi].dot(axis)) hi = i;
   }
-  return lo != hi && d[lo].dot(d[hi]) < c;
+  if (!(lo != hi && d[lo].dot(d[hi]) < c)) return false;
+  if (pair) *pair = {lo, hi};
+  return true;
 }
 
 // O(n): if every direction lies within angle alpha of the axis, every pair is within 2*alpha, so every
@@ -47,7 +49,8 @@ bool cone_excludes(const std::vector<Vec3>& d, const Vec3& axis, double c) {
 // so d_i . d_j < c needs theta_i + theta_j > acos(c). With the thetas sorted in decreasing order, each row of
 // the scan stops at the first partner too close to the axis, and the whole scan stops at the first empty row.
 // With `parts`, pairs of one part are skipped (the bound does not depend on the parts, so it still prunes).
-bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c, const std::vector<int>* parts = nullptr) {
+bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c, const std::vector<int>* parts = nullptr,
+                OpposingPair* pair = nullptr) {
   const size_t n = d.size();
   std::vector<double> theta(n);
   for (size_t i = 0; i < n; ++i) theta[i] = std::acos(std::clamp(d[i].dot(axis), -1.0, 1.0));
@@ -59,7 +62,10 @@ bool scan_pairs(const std::vector<Vec3>& d, const Vec3& axis, double c, const st
     const size_t i = order[a];
     if (theta[i] + theta[order[a + 1]] <= needed) return false;
     for (size_t b = a + 1; b < n && theta[i] + theta[order[b]] > needed; ++b)
-      if ((!parts || (*parts)[i] != (*parts)[order[b]]) && d[i].dot(d[order[b]]) < c) return true;
+      if ((!parts || (*parts)[i] != (*parts)[order[b]]) && d[i].dot(d[order[b]]) < c) {
+        if (pair) *pair = {i, order[b]};
+        return true;
+      }
   }
   return false;
 }
@@ -74,17 +80,20 @@ Vec3 mean_axis(const std::vector<Vec3>& d) {
 
 }  // namespace
 
-bool opposing_contacts(const std::vector<Vec3>& directions, double c) {
+bool opposing_contacts(const std::vector<Vec3>& directions, double c, OpposingPair* pair) {
   validate::finite(c, "c");
   check_directions(directions);
   const auto& d = directions;
   if (d.size() < 2) return false;
-  if (c > 1.0 + kDotMargin) return true;  // every pair qualifies
+  if (c > 1.0 + kDotMargin) {  // every pair qualifies
+    if (pair) *pair = {0, 1};
+    return true;
+  }
   const Vec3 axis = mean_axis(d);
   for (const Vec3& a : {axis, Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ())})
-    if (extremes_oppose(d, a, c)) return true;
+    if (extremes_oppose(d, a, c, pair)) return true;
   if (cone_excludes(d, axis, c)) return false;
-  return scan_pairs(d, axis, c);
+  return scan_pairs(d, axis, c, nullptr, pair);
 }
 
 bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vector<int>& parts, double c) {

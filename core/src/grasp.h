@@ -9,6 +9,7 @@
 #include "pose_fit.h"
 
 #include <array>
+#include <utility>
 
 #include <vector>
 
@@ -19,7 +20,9 @@ namespace handsim {
 // Cost: O(n) for the common cases (an opposing pair among the extremes along 4 axes is found at once; all
 // directions inside a cone narrower than acos(c)/2 are rejected at once); otherwise O(n log n) sorting plus
 // a pair scan pruned by the angle to the mean direction, O(n^2) only for adversarial rings of directions.
-bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos);
+// `pair`, when given and the answer is true, receives the indices of one opposing pair (i != j).
+using OpposingPair = std::pair<size_t, size_t>;
+bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos, OpposingPair* pair = nullptr);
 
 // opposing_contacts restricted to pairs whose parts differ (parts[i] labels directions[i], same length).
 // Checks the unrestricted test first (O(n) in the common cases), then the pruned pair scan, skipping pairs of one part.

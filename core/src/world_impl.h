@@ -11,6 +11,7 @@
 #include "skinning.h"
 #include "validate.h"
 
+#include <array>
 #include <map>
 #include <memory>
 #include <vector>
@@ -120,6 +121,8 @@ struct HandBodyPair {
   // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
   std::vector<EntryFace> entry_faces, previous_faces;
   bool opposing_alone = false;  // this step: eq. 3 over this hand's contacts alone (decide_grasps)
+  // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1.
+  std::array<int, 2> witness{-1, -1};
 };
 
 struct World::Impl {
@@ -213,13 +216,24 @@ struct World::Impl {
   void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
                             std::vector<std::pair<int, int>>& ranges) const;
   std::string deform_hands();
+  // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
+  std::vector<ParticleContact> scratch_contacts;       // detect_contacts, then deform_hands
+  std::vector<std::pair<int, int>> scratch_ranges;     // detect_contacts
+  std::vector<std::pair<int, int>> scratch_inside;     // deform_hands (displace_particles)
+  std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
+  std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
+  std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
   std::string decide_grasps(double dt);
   struct Intent {
     bool opposing = false;  // eq. 3 (across parts when a grasp would begin)
     bool closing = false;   // the hand closed by closing_distance within closing_window_s
   };
-  Intent hand_intent(const HandBodyPair& pair, uint32_t hand, std::vector<Vec3>& directions,
+  Intent hand_intent(HandBodyPair& pair, uint32_t hand, std::vector<Vec3>& directions,
                      std::vector<int>& parts) const;
+  static bool witness_opposes(const HandBodyPair& pair, double cos);
+  std::vector<Vec3> scratch_directions;  // scratch of decide_grasps
+  std::vector<int> scratch_parts;
+  std::vector<Intent> scratch_intents;
   bool hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
                     std::vector<int>& parts) const;
   double closing_needed() const;

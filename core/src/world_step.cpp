@@ -254,9 +254,9 @@ std::string World::Impl::detect_contacts(double dt) {
     entry.second.previous_faces.swap(entry.second.entry_faces);
     entry.second.entry_faces.clear();
   }
-  std::vector<ParticleContact> found;
+  std::vector<ParticleContact>& found = scratch_contacts;  // swapped into the pairs: buffers are reused
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
-  std::vector<std::pair<int, int>> ranges;
+  std::vector<std::pair<int, int>>& ranges = scratch_ranges;
   const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
   int tested = 0, touching = 0, candidates = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
@@ -366,7 +366,7 @@ void World::Impl::collide_bullet_particles(uint32_t hi, std::vector<std::vector<
 
 // --- local deformation: penetrating particles move back to the surface (what the user sees) ---
 std::string World::Impl::deform_hands() {
-  std::vector<ParticleContact> all;
+  std::vector<ParticleContact>& all = scratch_contacts;
   int deformed = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
@@ -387,7 +387,8 @@ std::string World::Impl::deform_hands() {
     } else {
       // Only the touching particles: their deformed centres are kept aside and the full deformed matrix is
       // made when read (refresh_particles), so 3 touching particles of 10,000 cost 3, not a 10,000 copy.
-      displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres);
+      displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres,
+                         &scratch_inside);
       h.deformed_current = false;
     }
     deformed += int(h.state.displaced.size());
@@ -401,22 +402,45 @@ double World::Impl::closing_needed() const { return def.grasp.closing_distance; 
 
 // Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
 // Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
-// contacts (hundreds on a pinched lid) need no parts. `directions` and `parts` are scratch space.
-World::Impl::Intent World::Impl::hand_intent(const HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
+// contacts (hundreds on a pinched lid) need no parts. A held body is kept by the existence of one opposing
+// pair, so the pair that kept it last frame is tried first: while thumb and finger still oppose (nearly
+// every frame of a hold), the answer is known after one dot product instead of a pass over every contact,
+// and it is the same answer (the full test is exact). `directions` and `parts` are scratch space.
+World::Impl::Intent World::Impl::hand_intent(HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
                                              std::vector<int>& parts) const {
   const double cos = def.grasp.cos_threshold;
   const bool across = def.grasp.across_parts && !pair.tracker.grasped();
+  Intent out;
+  out.closing = hands[hi].grip.closed_by() >= closing_needed();
+  if (!across && witness_opposes(pair, cos)) {
+    out.opposing = true;
+    return out;
+  }
   directions.clear();
   parts.clear();
   for (const ParticleContact& c : pair.contacts) {
     directions.push_back(c.normal);
     if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
   }
-  Intent out;
+  OpposingPair found{0, 0};
   out.opposing = pair.contacts.size() >= 2 && (across ? opposing_across_parts(directions, parts, cos)
-                                                      : opposing_contacts(directions, cos));
-  out.closing = hands[hi].grip.closed_by() >= closing_needed();
+                                                      : opposing_contacts(directions, cos, &found));
+  pair.witness = {-1, -1};
+  if (out.opposing && !across) pair.witness = {pair.contacts[found.first].particle, pair.contacts[found.second].particle};
   return out;
+}
+
+// Whether the two particles of the pair's last opposing pair both still touch and still oppose.
+bool World::Impl::witness_opposes(const HandBodyPair& pair, double cos) {
+  if (pair.witness[0] < 0 || pair.witness[0] == pair.witness[1]) return false;
+  auto find = [&](int particle) -> const ParticleContact* {  // contacts are sorted by particle
+    auto it = std::lower_bound(pair.contacts.begin(), pair.contacts.end(), particle,
+                               [](const ParticleContact& c, int p) { return c.particle < p; });
+    return it != pair.contacts.end() && it->particle == particle ? &*it : nullptr;
+  };
+  const ParticleContact* a = find(pair.witness[0]);
+  const ParticleContact* b = a ? find(pair.witness[1]) : nullptr;
+  return b && a->normal.dot(b->normal) < cos;
 }
 
 // Eq. 3 across two hands touching one body: a contact of one opposes a contact of the other.
@@ -431,9 +455,10 @@ bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std
 
 // --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
 std::string World::Impl::decide_grasps(double dt) {
-  std::vector<Vec3> directions;
-  std::vector<int> parts;
-  std::vector<Intent> alone;  // per pair in map order: eq. 3 and closing of its hand by itself
+  std::vector<Vec3>& directions = scratch_directions;
+  std::vector<int>& parts = scratch_parts;
+  std::vector<Intent>& alone = scratch_intents;  // per pair in map order: eq. 3 and closing of its hand by itself
+  alone.clear();
   for (auto& [key, pair] : pairs) {
     alone.push_back(bodies[key.second].manipulable() ? hand_intent(pair, key.first, directions, parts) : Intent{});
     pair.opposing_alone = alone.back().opposing;
@@ -594,8 +619,10 @@ std::string World::Impl::follow_primary_hands() {
 // also graze the base, and the base pushed by the hand that carries the lid hinged to it would be pushed by
 // itself (the experiments saw such a base thrown metres). The parts stay free for the other hand.
 std::string World::Impl::fit_touched_bodies(double dt) {
-  std::vector<Vec3> from, to;
-  std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
+  std::vector<Vec3>& from = scratch_from;
+  std::vector<Vec3>& to = scratch_to;
+  std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
+  held_groups.clear();
   for (uint32_t bi : held_bodies()) {
     const Body& b = bodies[bi];  // an unjointed held body is its own group and is not fitted
     held_groups.push_back({b.grasp.primary.index, group_root(bi)});
@@ -608,7 +635,8 @@ std::string World::Impl::fit_touched_bodies(double dt) {
   int fitted = 0;
   for (uint32_t k : joint_order) bodies[joints[k].child].supported = false;  // only joints' children are
   // The touched bodies in slot order (the pairs are ordered by hand first), each with its pairs.
-  std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> touched;
+  auto& touched = scratch_touched;
+  touched.clear();
   for (const auto& entry : pairs)
     if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
   std::stable_sort(touched.begin(), touched.end(),

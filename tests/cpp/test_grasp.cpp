@@ -104,6 +104,12 @@ TEST(OpposingContacts, MatchesBruteForceOnRandomSets) {
       positives += expected;
       agree += opposing_contacts(d, c) == expected;
       ASSERT_EQ(opposing_contacts(d, c), expected) << "trial " << trial << " c " << c;
+      // The pair it names (the world keeps it as the witness of a held grasp) is one that opposes.
+      OpposingPair pair{0, 0};
+      if (opposing_contacts(d, c, &pair)) {
+        ASSERT_NE(pair.first, pair.second) << "trial " << trial;
+        ASSERT_LT(d[pair.first].dot(d[pair.second]), c) << "trial " << trial << " c " << c;
+      }
       const bool across = brute_force(d, c, &parts);
       across_positives += across;
       ASSERT_EQ(opposing_across_parts(d, parts, c), across) << "trial " << trial << " c " << c << " (parts)";
