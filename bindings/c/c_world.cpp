@@ -1,5 +1,8 @@
-// C ABI: the world's lifetime and settings, the step, and what a step reports (stages, events, hash).
+// C ABI: the world's lifetime and settings, the step, what a step reports (stages, events, hash), and save and
+// restore.
 #include "c_api.h"
+
+#include <cstring>
 
 namespace handsim::capi {
 
@@ -63,6 +66,23 @@ HANDSIM_API int HANDSIM_CALL handsim_state_hash(const handsim_world* world, uint
   return guarded([&] {
     const World& w = checked(world).world;
     deref(out_hash, "out_hash") = w.state_hash();
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_save_state(handsim_world* world, uint8_t* out_bytes, int32_t capacity,
+                                                int32_t* count) {
+  return guarded([&] {
+    const std::vector<uint8_t> bytes = checked(world).world.save_state();
+    if (output_buffer(out_bytes, capacity, count, bytes.size(), "out_bytes"))
+      std::memcpy(out_bytes, bytes.data(), bytes.size());
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_restore_state(handsim_world* world, const uint8_t* bytes, int32_t size) {
+  return guarded([&] {
+    handsim_world& w = checked(world);
+    input_array(bytes, size, "state", "size");
+    w.world.restore_state(bytes, size_t(size));
   });
 }
 

@@ -35,7 +35,7 @@
  * handsim_world_settings gained paper_pipeline and render_threads (it now mirrors every WorldDef field);
  * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value). */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 0
+#define HANDSIM_ABI_VERSION_MINOR 1
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -412,9 +412,20 @@ HANDSIM_API int HANDSIM_CALL handsim_world_destroy(handsim_world* world);
 HANDSIM_API int HANDSIM_CALL handsim_world_reset(handsim_world* world);
 HANDSIM_API int HANDSIM_CALL handsim_get_world_settings(const handsim_world* world, handsim_world_settings* out_settings);
 HANDSIM_API int HANDSIM_CALL handsim_world_time(const handsim_world* world, double* out_time);
-/* Stable 64-bit hash of the state (poses, velocities, grasps, joint coordinates), identical across runs,
+/* Stable 64-bit hash of everything that decides the world's future (bodies, joints, Bullet's copies and sleep,
+ * grasp trackers, kept contact faces, hand histories, clock, substep accumulator), identical across runs,
  * processes and bindings for the same inputs. */
 HANDSIM_API int HANDSIM_CALL handsim_state_hash(const handsim_world* world, uint64_t* out_hash);
+/* The world's state as bytes (buffer rules above; a size query saves too). The world's Bullet scene is rebuilt
+ * from them, so it and every world restored from the bytes continue bit for bit alike (docs/design.md "Save
+ * and restore"). Since ABI 2.1. */
+HANDSIM_API int HANDSIM_CALL handsim_save_state(handsim_world* world, uint8_t* out_bytes, int32_t capacity,
+                                                int32_t* count);
+/* Restores bytes from handsim_save_state into a world built alike (the same settings and the same adds and
+ * removes of bodies, joints and hands; ids stay this world's); events and stage reports are emptied. Bad
+ * bytes (truncated, corrupt, another format version, another world): HANDSIM_INVALID_ARGUMENT naming "state",
+ * world unchanged. Since ABI 2.1. */
+HANDSIM_API int HANDSIM_CALL handsim_restore_state(handsim_world* world, const uint8_t* bytes, int32_t size);
 
 /* One frame of Algorithm 1. hands[i] drives the i-th hand of handsim_hands(); fewer frames than hands leave
  * the rest untracked this frame (hands may be NULL when hand_count is 0). Everything is validated first. */

@@ -607,6 +607,8 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_get_world_settings(WorldHandle world, out WorldSettings settings);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_world_time(WorldHandle world, out double time);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_state_hash(WorldHandle world, out ulong hash);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_save_state(WorldHandle world, [Out] byte[] bytes, int capacity, out int count);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_restore_state(WorldHandle world, [In] byte[] bytes, int size);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_step(WorldHandle world, double dt, [In] HandFrame[] hands, int handCount);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_reports(WorldHandle world, [Out] StageReport[] reports, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_summary(WorldHandle world, [Out] byte[] text, int capacity, out int length);
@@ -735,6 +737,18 @@ namespace Handsim
         public double Time { get { double t; Native.Check(Native.handsim_world_time(handle, out t), "handsim_world_time"); return t; } }
         public ulong StateHash { get { ulong h; Native.Check(Native.handsim_state_hash(handle, out h), "handsim_state_hash"); return h; } }
         public void Reset() { Native.Check(Native.handsim_world_reset(handle), "handsim_world_reset"); }
+
+        /// <summary>The world's state as bytes; this world and every world restored from them continue bit for
+        /// bit alike (docs/design.md "Save and restore").</summary>
+        public byte[] SaveState()
+        {
+            return Native.Read<byte>((byte[] b, int capacity, out int count) => Native.handsim_save_state(handle, b, capacity, out count), "handsim_save_state");
+        }
+        /// <summary>Restores SaveState's bytes into a world built alike; bad bytes throw naming "state".</summary>
+        public void RestoreState(byte[] state)
+        {
+            Native.Check(Native.handsim_restore_state(handle, state, state == null ? 0 : state.Length), "handsim_restore_state");
+        }
 
         // --- stepping ---
 

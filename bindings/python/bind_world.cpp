@@ -195,7 +195,35 @@ void bind_world_class(py::module_& m) {
            "Advance one frame of dt seconds. hands[i] (a HandFrame) drives the i-th hand of hands(); hands\n"
            "without a frame are untracked this frame. Everything is validated before anything changes.")
       .def_property_readonly("time", &World::time)
-      .def("state_hash", &World::state_hash, "Stable 64-bit hash of the whole state.");
+      .def("state_hash", &World::state_hash,
+           "Stable 64-bit hash of everything that decides the world's future (bodies, joints, Bullet's copies\n"
+           "and sleep, grasp trackers, kept contact faces, hand histories, clock, substep accumulator).")
+      .def("save_state",
+           [](World& w) {
+             std::vector<uint8_t> bytes;
+             {
+               py::gil_scoped_release release;
+               bytes = w.save_state();
+             }
+             return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+           },
+           "The world's state as bytes (docs/design.md \"Save and restore\"). The world's Bullet scene is rebuilt\n"
+           "from them, so it and every world restored from them continue bit for bit alike.")
+      .def("restore_state",
+           [](World& w, py::handle state) {
+             if (!PyObject_CheckBuffer(state.ptr()))
+               throw py::type_error("state: expected bytes from save_state(), got " +
+                                    std::string(py::str(py::type::of(state).attr("__name__"))));
+             const py::buffer_info info = py::reinterpret_borrow<py::buffer>(state).request();
+             if (info.itemsize != 1 || info.ndim != 1 || (info.size > 1 && info.strides[0] != 1))
+               throw py::type_error("state: expected contiguous bytes from save_state()");
+             py::gil_scoped_release release;
+             w.restore_state(static_cast<const uint8_t*>(info.ptr), size_t(info.size));
+           },
+           py::arg("state"),
+           "Put the world in a state from save_state() (bytes, bytearray or memoryview). The world must be built\n"
+           "alike (same WorldDef, same adds and removes of bodies, joints and hands); ids stay this world's;\n"
+           "events() and stage_reports() are emptied. Bad bytes raise handsim.Error naming 'state', world intact.");
 }
 
 }  // namespace

@@ -263,7 +263,7 @@ void BulletBackend::set_collision(int a, int b, bool enabled) {
 BulletBackend::BulletBackend(const WorldDef& def) : impl_(std::make_unique<Impl>(def)) {}
 BulletBackend::~BulletBackend() = default;
 
-int BulletBackend::add(const BodyDef& def, BodyMotion motion) {
+int BulletBackend::add(const BodyDef& def, BodyMotion motion, int at) {
   Impl::Entry e;
   e.shape = make_shape(def.shape, e.mesh);
   btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, e.shape.get());
@@ -278,7 +278,11 @@ int BulletBackend::add(const BodyDef& def, BodyMotion motion) {
   impl_->woken = true;
 
   int handle;
-  if (!impl_->free_handles.empty()) {
+  if (at >= 0) {
+    handle = at;
+    if (impl_->entries.size() <= size_t(at)) impl_->entries.resize(size_t(at) + 1);
+    impl_->entries[handle] = std::move(e);
+  } else if (!impl_->free_handles.empty()) {
     handle = impl_->free_handles.back();
     impl_->free_handles.pop_back();
     impl_->entries[handle] = std::move(e);
@@ -367,6 +371,64 @@ void BulletBackend::idle(double h) {
   // A kinematic body that did not move keeps its transform as the next start: nothing to save for it (its
   // velocity is recomputed by the next real step, which starts with the same save).
   moved.clear();
+}
+
+namespace {
+std::array<double, 12> numbers_of(const btTransform& t) {
+  std::array<double, 12> out;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out[3 * r + c] = t.getBasis()[r][c];
+  for (int k = 0; k < 3; ++k) out[9 + k] = t.getOrigin()[k];
+  return out;
+}
+btTransform transform_of(const std::array<double, 12>& n) {
+  return btTransform(btMatrix3x3(n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8]),
+                     btVector3(n[9], n[10], n[11]));
+}
+}  // namespace
+
+BackendState BulletBackend::state() const {
+  BackendState s;
+  s.bodies.resize(impl_->entries.size());
+  for (size_t h = 0; h < impl_->entries.size(); ++h) {
+    const btRigidBody* body = impl_->entries[h].body.get();
+    if (!body) continue;
+    BackendBody& b = s.bodies[h];
+    b.used = true;
+    b.transform = numbers_of(body->getWorldTransform());
+    b.interpolation = numbers_of(body->getInterpolationWorldTransform());
+    b.linear = from_bt(body->getLinearVelocity());
+    b.angular = from_bt(body->getAngularVelocity());
+    b.interpolation_linear = from_bt(body->getInterpolationLinearVelocity());
+    b.interpolation_angular = from_bt(body->getInterpolationAngularVelocity());
+    b.activation = body->getActivationState();
+    b.deactivation_time = body->getDeactivationTime();
+  }
+  s.free_handles = impl_->free_handles;
+  s.moved_kinematic = impl_->moved_kinematic;
+  s.woken = impl_->woken;
+  return s;
+}
+
+void BulletBackend::restore(const BackendState& s) {
+  for (size_t h = 0; h < s.bodies.size() && h < impl_->entries.size(); ++h) {
+    btRigidBody* body = impl_->entries[h].body.get();
+    const BackendBody& b = s.bodies[h];
+    if (!body || !b.used) continue;
+    body->setWorldTransform(transform_of(b.transform));
+    body->setInterpolationWorldTransform(transform_of(b.interpolation));
+    body->setLinearVelocity(bt(b.linear));
+    body->setAngularVelocity(bt(b.angular));
+    body->setInterpolationLinearVelocity(bt(b.interpolation_linear));
+    body->setInterpolationAngularVelocity(bt(b.interpolation_angular));
+    body->forceActivationState(b.activation);
+    body->setDeactivationTime(btScalar(b.deactivation_time));
+    // The broadphase bounds follow the transform, as after a step.
+    impl_->world.updateSingleAabb(body);
+  }
+  impl_->free_handles = s.free_handles;
+  impl_->moved_kinematic = s.moved_kinematic;
+  impl_->woken = s.woken;
 }
 
 }  // namespace handsim

@@ -7,9 +7,30 @@
 
 #include "joint_solvers.h"
 
+#include <array>
 #include <memory>
+#include <vector>
 
 namespace handsim {
+
+// What Bullet keeps of a body between substeps that decides its future, in Bullet's own numbers: the
+// transform and velocities, the interpolation transform and velocities a kinematic body's next velocity is
+// taken from, and sleep (activation state, time at rest). Saved and restored by world_state.cpp.
+struct BackendBody {
+  bool used = false;  // false: a free handle
+  std::array<double, 12> transform{}, interpolation{};  // basis row by row, then origin
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  Vec3 interpolation_linear = Vec3::Zero(), interpolation_angular = Vec3::Zero();
+  int activation = 0;
+  double deactivation_time = 0;
+};
+
+struct BackendState {
+  std::vector<BackendBody> bodies;  // by handle
+  std::vector<int> free_handles;    // in the order add() takes them
+  std::vector<int> moved_kinematic;
+  bool woken = true;
+};
 
 class BulletBackend {
  public:
@@ -18,8 +39,9 @@ class BulletBackend {
   BulletBackend(const BulletBackend&) = delete;
   BulletBackend& operator=(const BulletBackend&) = delete;
 
-  // Returns a backend handle (an index, reused after remove).
-  int add(const BodyDef& def, BodyMotion motion);
+  // Returns a backend handle (an index, reused after remove). `handle` >= 0 puts the body there (a rebuild
+  // from a BackendState: restore() then sets the free handles).
+  int add(const BodyDef& def, BodyMotion motion, int handle = -1);
   void remove(int handle);
   void set_motion(int handle, BodyMotion motion, double mass);
   // Push the core's state; wakes the body.
@@ -48,6 +70,12 @@ class BulletBackend {
   void remove_constraint(int handle);
   // Whether two bodies may collide. A hard joint's child overlaps its parent at the joint by design.
   void set_collision(int a, int b, bool enabled);
+
+  // Save and restore. A backend rebuilt with add(def, motion, handle) for every used handle, its constraints
+  // and collision exceptions re-added, then restore(state), is the same for every world that does so from
+  // the same state; Bullet's contact caches (manifolds, broadphase pairs) start empty (docs/design.md).
+  BackendState state() const;
+  void restore(const BackendState& state);
 
  private:
   struct Impl;

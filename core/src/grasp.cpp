@@ -198,6 +198,12 @@ void GripHistory::push(double span, const Vec3& palm, double time, double window
   samples_.erase(samples_.begin(), samples_.begin() + std::ptrdiff_t(old));
 }
 
+bool GripHistory::in_time_order() const {
+  for (size_t i = 1; i < samples_.size(); ++i)
+    if (!(samples_[i].time > samples_[i - 1].time)) return false;
+  return true;
+}
+
 double GripHistory::closed_by() const {
   double widest = 0;
   for (const Sample& s : samples_) widest = std::max(widest, s.span);
@@ -234,6 +240,12 @@ void HandMotionHistory::push(const Pose& palm, double time) {
   samples_[static_cast<size_t>(next_)] = {p, time};
   next_ = (next_ + 1) % window();
   count_ = std::min(count_ + 1, window());
+}
+
+bool HandMotionHistory::in_time_order() const {
+  for (int age = 1; age < count_; ++age)
+    if (!(sample(age - 1).time > sample(age).time)) return false;
+  return true;
 }
 
 const HandMotionHistory::Sample& HandMotionHistory::sample(int age) const {

@@ -73,6 +73,17 @@ class GraspTracker {
   double untracked_time() const { return untracked_s_; }
   const GraspSettings& settings() const { return settings_; }
 
+  // What the tracker carries from frame to frame, for save, restore and the state hash (world_state.cpp);
+  // the settings are the world's, not state.
+  template <class Visitor, class Self>
+  static void visit_state(Self& t, Visitor& v) {
+    v.enumeration(t.state_, GraspState::Grasped);
+    v.state(t.grasp_streak_);
+    v.state(t.open_streak_);
+    v.state(t.tightest_);
+    v.state(t.untracked_s_);
+  }
+
  private:
   GraspEvent update_free(const GraspInput& in);
   GraspEvent update_grasped(const GraspInput& in);
@@ -111,6 +122,17 @@ class GripHistory {
   // now, over the samples both have at the same times (0 when they share none).
   double approached_by(const GripHistory& other) const;
 
+  bool in_time_order() const;  // strictly increasing times, as push keeps them (a restored state is checked)
+
+  template <class Visitor, class Self>
+  static void visit_state(Self& g, Visitor& v) {
+    v.list(g.samples_, [&v](auto& s) {
+      v.state(s.span);
+      v.state(s.palm);
+      v.state(s.time);
+    });
+  }
+
  private:
   struct Sample {
     double span = 0;
@@ -142,6 +164,19 @@ class HandMotionHistory {
   Vec3 point_velocity(const Vec3& world_point) const;
   // linear = point_velocity(centre_of_mass), angular = angular_velocity().
   BodyVelocity attached_body_velocity(const Vec3& centre_of_mass) const;
+
+  bool in_time_order() const;  // strictly increasing times, as push keeps them (a restored state is checked)
+
+  // The ring buffer as it is (its length is the world's velocity_window), for save, restore and the hash.
+  template <class Visitor, class Self>
+  static void visit_state(Self& h, Visitor& v) {
+    v.fixed_list(h.samples_, [&v](auto& s) {
+      v.state(s.pose);
+      v.state(s.time);
+    });
+    v.index(h.next_, uint32_t(h.samples_.size()));
+    v.index(h.count_, uint32_t(h.samples_.size() + 1));
+  }
 
  private:
   struct Sample {

@@ -1,6 +1,5 @@
 #include "handsim/world.h"
 
-#include "state_hash.h"
 #include "validate.h"
 #include "world_impl.h"
 
@@ -145,6 +144,8 @@ BodyId World::add_body(const BodyDef& in) {
   b.shape = def.shape;
   b.prepared = std::move(prepared);
   b.mass = def.mass;
+  b.friction = def.friction;
+  b.restitution = def.restitution;
   b.declared = b.motion = motion_of(def);
   b.pose = b.synced_pose = def.pose;
   b.linear = b.motion == BodyMotion::Static ? Vec3::Zero() : def.linear_velocity;
@@ -386,33 +387,6 @@ void World::step(double dt) { step(dt, {}); }  // locks there
 double World::time() const {
   const auto held = lock();
   return impl_->time;
-}
-
-uint64_t World::state_hash() const {
-  const auto held = lock();
-  StateHasher hasher;
-  hasher.add(impl_->time);
-  for (uint32_t i = 0; i < impl_->bodies.size(); ++i) {
-    const Body& b = impl_->bodies[i];
-    // Free slots are left out (a rolled-back build leaves some; they are not state), and so are generations:
-    // they come from a process-wide counter, not from this world's state. For live slots the word is the
-    // same as when free slots were hashed, so hashes of worlds without free slots (the golden one) stay.
-    if (!b.alive) continue;
-    hasher.add(uint64_t(i) << 1 | 1u);
-    hasher.add(b.pose);
-    hasher.add(b.linear);
-    hasher.add(b.angular);
-    hasher.add(uint64_t(b.grasp.grasped) << 63 | uint64_t(b.grasp.primary.index) << 32 |
-               uint64_t(b.grasp.secondary.is_null() ? 0xffffffffu : b.grasp.secondary.index));
-  }
-  for (const Joint& j : impl_->joints) {
-    hasher.add(uint64_t(j.alive));
-    if (!j.alive) continue;
-    hasher.add(j.value);
-    hasher.add(j.rate);
-    hasher.add(Pose{j.spin, j.rotation});
-  }
-  return hasher.value();
 }
 
 }  // namespace handsim

@@ -24,6 +24,7 @@ struct Body {
   ShapeDef shape;
   PreparedShape prepared;  // narrow-phase data for hand particles, built once
   double mass = 0;
+  double friction = 0.5, restitution = 0;  // as given; Bullet holds them, a rebuilt Bullet scene needs them
   BodyMotion declared = BodyMotion::Static;  // what the BodyDef asked for
   BodyMotion motion = BodyMotion::Static;    // now: a grasped dynamic body is kinematic
   Pose pose;
@@ -244,6 +245,14 @@ struct World::Impl {
   std::string retake_secondary_hands();
 
   void validate_step(double dt, const std::vector<HandFrame>& frames) const;
+
+  // Save and restore (world_state.cpp).
+  std::vector<uint8_t> save_state();
+  void restore_state(const uint8_t* data, size_t size, bool keep_events);
+  uint64_t state_hash() const;
+  uint64_t model_fingerprint() const;
+  std::string inconsistency() const;
+  void rebuild_backend(const BackendState& state);
   void substep(double h, int i, int n, bool physics);
 
   // What moves (world_activity.cpp).

@@ -251,6 +251,44 @@ static class CSharpTest
 
     // --- bad inputs ----------------------------------------------------------------------------------------------------
 
+    // Save and restore: a world built alike and restored from SaveState's bytes gives the saving world's hash for
+    // each of the next 300 frames; bad bytes throw naming "state" with the world unchanged.
+    static void TestSaveRestore()
+    {
+        const int saveAt = 60, frames = 300;
+        HandPoseParams shape = HandPoseParams.LidPinch;
+        var input = new TrackedHand(HandSide.Right);
+        using (var a = new World())
+        using (var b = new World())
+        {
+            JewelryBox boxA = a.BuildJewelryBox(), boxB = b.BuildJewelryBox();
+            a.AddHand(HandDef.Default);
+            b.AddHand(HandDef.Default);
+            Action<World, JewelryBox, int> step = (w, box, i) =>
+            {
+                Hands.MakeFrame(HandSide.Right, w.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), shape, input.Joints);
+                w.Step(Dt, input);
+            };
+            for (int i = 0; i < saveAt; ++i) step(a, boxA, i);
+            ulong before = a.StateHash;
+            byte[] state = a.SaveState();
+            Check(a.StateHash == before, "saving changed the state");
+            var expected = new ulong[frames];
+            for (int i = 0; i < frames; ++i) { step(a, boxA, saveAt + i); expected[i] = a.StateHash; }
+            for (int i = 0; i < 10; ++i) step(b, boxB, i);  // another past
+            b.RestoreState(state);
+            Check(b.StateHash == before, "restored hash differs");
+            int diverged = -1;
+            for (int i = 0; i < frames && diverged < 0; ++i) { step(b, boxB, saveAt + i); if (b.StateHash != expected[i]) diverged = i; }
+            Check(diverged < 0, "the restored world diverged " + diverged + " frames after the restore");
+            if (diverged < 0) Console.WriteLine("save/restore: " + state.Length + " bytes; the restored world matched for " + frames + " frames");
+            byte[] cut = new byte[state.Length - 1];
+            Array.Copy(state, cut, cut.Length);
+            Rejects(b, () => b.RestoreState(cut), Status.InvalidArgument, "state: is truncated");
+            Rejects(b, () => b.RestoreState(new byte[3]), Status.InvalidArgument, "state: is 3 bytes");
+        }
+    }
+
     static void TestBadInputs()
     {
         Console.WriteLine("bad inputs:");
@@ -583,6 +621,7 @@ static class CSharpTest
         TestEnums();
         TestScenario(args[0]);
         TestBadInputs();
+        TestSaveRestore();
         TestShapesJointsAndMesh();
         TestUnityConversions();
         TestFrameLoopAllocations();

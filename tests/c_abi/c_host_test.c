@@ -366,6 +366,99 @@ static void test_hand_outputs(handsim_world* world, handsim_hand_id hand) {
   free(triangles);
 }
 
+/* --- save and restore: a world restored from handsim_save_state's bytes continues bit for bit ------------- */
+
+#define SAVE_AT 60         /* the lid is held, half way up its swing */
+#define CONTINUE_FOR 1000  /* frames compared after the save (the schedule holds the lid at its stop from 130) */
+
+typedef struct pinch_world {
+  handsim_world* world;
+  handsim_jewelry_box box;
+  handsim_hand_pose_params shape;
+  handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
+  handsim_hand_frame frame;
+} pinch_world;
+
+static void pinch_world_create(pinch_world* p) {
+  handsim_hand_id hand = 0;
+  MUST(handsim_world_create(NULL, &p->world));
+  MUST(handsim_build_jewelry_box(p->world, NULL, &p->box));
+  MUST(handsim_add_hand(p->world, NULL, &hand));
+  MUST(handsim_lid_pinch_shape(&p->shape));
+  p->frame.handedness = HANDSIM_RIGHT;
+  p->frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  p->frame.joints = p->joints;
+}
+
+static void pinch_world_step(pinch_world* p, int i) {
+  handsim_pose palm;
+  MUST(handsim_jewelry_box_lid_pinch_palm(p->world, &p->box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
+  MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &p->shape, p->joints, HANDSIM_HAND_JOINT_COUNT));
+  MUST(handsim_step(p->world, SCENARIO_DT, &p->frame, 1));
+}
+
+static void test_save_restore(void) {
+  pinch_world a, b;
+  uint8_t* bytes;
+  uint64_t* expected = (uint64_t*)malloc(CONTINUE_FOR * sizeof(uint64_t));
+  int32_t size = 0, written = 0;
+  int i, first_difference = -1;
+  handsim_grasp_info grasp;
+  pinch_world_create(&a);
+  for (i = 0; i < SAVE_AT; ++i) pinch_world_step(&a, i);
+  MUST(handsim_body_grasp(a.world, a.box.lid, &grasp));
+  CHECK(grasp.grasped, "the lid should be held at the save");
+  g_hash_before = hash_of(a.world);
+  MUST(handsim_save_state(a.world, NULL, 0, &size));
+  CHECK(size > 40, "a state of %d bytes", (int)size);
+  bytes = (uint8_t*)malloc((size_t)size);
+  MUST(handsim_save_state(a.world, bytes, size, &written));
+  CHECK(written == size, "size query %d, saved %d", (int)size, (int)written);
+  CHECK(hash_of(a.world) == g_hash_before, "saving changed the state");
+  for (i = 0; i < CONTINUE_FOR; ++i) {
+    pinch_world_step(&a, SAVE_AT + i);
+    expected[i] = hash_of(a.world);
+  }
+
+  pinch_world_create(&b);
+  for (i = 0; i < 25; ++i) pinch_world_step(&b, i); /* a different past */
+  MUST(handsim_restore_state(b.world, bytes, size));
+  CHECK(hash_of(b.world) == g_hash_before, "restored hash differs from the saved world's");
+  for (i = 0; i < CONTINUE_FOR && first_difference < 0; ++i) {
+    pinch_world_step(&b, SAVE_AT + i);
+    if (hash_of(b.world) != expected[i]) first_difference = i;
+  }
+  CHECK(first_difference < 0, "the restored world diverged %d frames after the restore", first_difference);
+  printf("save/restore: %d bytes; the restored world matched the saving world's hash for %d frames\n", (int)size,
+         first_difference < 0 ? CONTINUE_FOR : first_difference);
+
+  /* Bad bytes: refused naming "state", the world unchanged. */
+  g_hash_before = hash_of(b.world);
+  REJECT(b.world, handsim_restore_state(b.world, bytes, size - 1), HANDSIM_INVALID_ARGUMENT, "state: is truncated");
+  REJECT(b.world, handsim_restore_state(b.world, bytes, 12), HANDSIM_INVALID_ARGUMENT, "state: is 12 bytes");
+  REJECT(b.world, handsim_restore_state(b.world, NULL, size), HANDSIM_INVALID_ARGUMENT, "state: must not be null");
+  REJECT(b.world, handsim_restore_state(b.world, bytes, -1), HANDSIM_INVALID_ARGUMENT, "size: must be >= 0");
+  bytes[8] = 7; /* the format version */
+  REJECT(b.world, handsim_restore_state(b.world, bytes, size), HANDSIM_INVALID_ARGUMENT, "state: has format version 7");
+  bytes[8] = 1;
+  bytes[size / 2] ^= 1;
+  REJECT(b.world, handsim_restore_state(b.world, bytes, size), HANDSIM_INVALID_ARGUMENT, "state: is corrupt");
+  bytes[size / 2] ^= 1;
+  {
+    handsim_body_def extra;
+    handsim_body_id id = 0;
+    MUST(handsim_body_def_default(&extra));
+    MUST(handsim_add_body(b.world, &extra, &id));
+    g_hash_before = hash_of(b.world);
+    REJECT(b.world, handsim_restore_state(b.world, bytes, size), HANDSIM_INVALID_ARGUMENT,
+           "state: was saved from a world with other");
+  }
+  free(bytes);
+  free(expected);
+  MUST(handsim_world_destroy(a.world));
+  MUST(handsim_world_destroy(b.world));
+}
+
 /* --- bad inputs: documented statuses and messages, and the world is unchanged --------------------------------- */
 
 static void test_bad_inputs(void) {
@@ -690,6 +783,7 @@ int main(int argc, char** argv) {
   test_scenario(argv[1], argc > 2 ? argv[2] : NULL);
   test_shapes_and_joints();
   test_bad_inputs();
+  test_save_restore();
   printf("%d checks, %d failures\n", g_checks, g_failures);
   return g_failures == 0 ? 0 : 1;
 }

@@ -123,15 +123,12 @@ TEST(Bounds, EveryFieldOutsideItsRangeIsRejectedNamingItAndChangesNothing) {
       {"hinge lower 1e308",
        [](World& w, const JewelryBox& box) {
          HingeDef h;
-         h.child = w.add_body(cube(0.05, 2.0));  // (added before the hinge: not part of this call's check)
+         // The spare cube added below for this case: adding and removing a body here would change the state
+         // (Bullet wakes what touched it).
+         h.child = w.bodies().back();
          h.parent = box.base;
          h.lower = 1e308;
-         try {
-           w.add_joint(h);
-         } catch (...) {
-           w.remove_body(h.child);
-           throw;
-         }
+         w.add_joint(h);
        },
        "hinge.lower"},
       {"ball pivot 1e308",
@@ -161,6 +158,7 @@ TEST(Bounds, EveryFieldOutsideItsRangeIsRejectedNamingItAndChangesNothing) {
   };
   World world;
   const JewelryBox box = build_jewelry_box(world);
+  world.add_body(cube(0.05, 2.0));  // the spare cube the hinge case would hang on the base
   world.add_hand(HandDef{});
   for (int i = 0; i < 5; ++i) world.step(kDt);
   for (const Case& c : cases) {

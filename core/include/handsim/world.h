@@ -8,6 +8,7 @@
 #include "handsim/shape.h"
 #include "handsim/types.h"
 
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -203,9 +204,23 @@ class World {
   std::vector<StageReport> stage_reports() const;
   std::string stage_summary() const;  // readable: which stages ran, what they cost, why
 
-  // A stable 64-bit FNV-1a hash of every body's state (bits of the doubles), identical across runs and
-  // processes for the same inputs.
+  // A stable 64-bit FNV-1a hash of everything that decides the world's future (what save_state saves but the
+  // caches: bodies, joints, Bullet's copies of the bodies and their sleep, grasp trackers, entry faces, hand
+  // histories, the clock and the substep accumulator; bits of the doubles), identical across runs and
+  // processes for the same inputs. Generations and free slots are not state.
   uint64_t state_hash() const;
+
+  // --- save and restore (docs/design.md "Save and restore") ---
+  // The world's state as bytes (a versioned header, then the state; format in docs/design.md). The world's
+  // Bullet scene is rebuilt from them here, as restore_state rebuilds it, so this world and every world
+  // restored from the bytes continue bit for bit alike (Bullet's contact caches start afresh in both).
+  std::vector<uint8_t> save_state();
+  // Puts the world in the saved state. The world must be built alike: the same WorldDef and the same adds
+  // and removes of bodies, joints and hands (so the same slots, shapes, masses, joints and hands); ids stay
+  // this world's. events() and stage_reports() are emptied. Bad bytes (truncated, corrupt, another format
+  // version, another world): Error naming "state", world unchanged.
+  void restore_state(const std::vector<uint8_t>& state);
+  void restore_state(const uint8_t* data, size_t size);
 
  private:
   struct Impl;
@@ -213,6 +228,7 @@ class World {
   // Held by every member function for its whole call (a pointer so that World stays movable).
   std::unique_ptr<std::mutex> mutex_;
   std::unique_lock<std::mutex> lock() const { return std::unique_lock<std::mutex>(*mutex_); }
+  friend struct WorldInternals;  // tests/cpp/test_state.cpp perturbs the state piece by piece
 };
 
 }  // namespace handsim
