@@ -223,6 +223,13 @@ quaternion (within 1e-3) and a radius >= 0. The hand is tracked when its palm an
       R"doc(A synthetic adult hand with its palm joint at palm_pose (7,; default identity): fingers along the
 palm's -Z, back of the hand +Y. curl: one number for every finger or (5,) thumb..little, 0 flat .. 1 fist;
 thumb_opposition 0..1 (1: thumb pad on the index pad); spread; scale. Keywords override params (a HandPoseParams).)doc");
+  m.def("open_grip", &open_grip, py::arg("grip"), py::arg("openness"),
+        "The HandPoseParams `grip` opened by `openness` (0 the grip .. 1 open: curls and thumb opposition 0, spread "
+        "and scale kept), linearly: how every synthetic hand opens its grip (docs/grasp.md, Intent).");
+  m.def("closing_grip", &closing_grip, py::arg("grip"), py::arg("t"), py::arg("duration") = kGripClosingS,
+        "The grip `t` s after the hand began to close it over `duration` s (minimum jerk): open for t <= 0, the "
+        "grip itself from t >= duration. Every synthetic hand closes onto its object this way.");
+  m.attr("GRIP_CLOSING_S") = kGripClosingS;
   m.def(
       "bind_frame",
       [](py::handle handedness, double scale) { return bind_frame(cast_arg<Handedness>(handedness, "handedness"), scale); },

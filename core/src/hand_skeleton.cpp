@@ -183,6 +183,22 @@ HandFrame bind_frame(Handedness handedness, double scale) {
   return make_hand_frame(handedness, Pose{}, p);
 }
 
+HandPoseParams open_grip(const HandPoseParams& grip, double openness) {
+  validate::in_range(openness, 0, 1, "openness", "");
+  HandPoseParams p = grip;
+  for (double& c : p.curl) c *= 1 - openness;
+  p.thumb_opposition *= 1 - openness;
+  return p;
+}
+
+HandPoseParams closing_grip(const HandPoseParams& grip, double t, double duration) {
+  validate::finite(t, "t");
+  if (!(duration > 0) || !std::isfinite(duration)) validate::fail("duration", "must be finite and > 0 s, got " + validate::fmt(duration));
+  const double s = std::clamp(t / duration, 0.0, 1.0);
+  const double closed = s * s * s * (10 - 15 * s + 6 * s * s);  // minimum jerk (Flash & Hogan)
+  return open_grip(grip, 1 - closed);
+}
+
 // OpenXR joint radii are a finger's half width (mm to 2 cm), but adapters derive them from whatever a
 // recording says (a fuzzed Leap document gives 0.25 m): a radius is a length like any other, up to 1e7 m.
 constexpr double kMaxJointRadius = validate::kMaxCoordinate;

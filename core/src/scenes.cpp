@@ -120,8 +120,9 @@ Vec3 JewelryBox::hinge_axis(const World& world) const {
 
 std::vector<HandFrame> scenario_frames(const JewelryBox& box, const World& world, int frame) {
   const double t = frame / 60.0;
-  // Right: 0.25 s closing in, then a 4 s cycle open to 80 degrees and back, repeated.
-  const double cycle = std::fmod(std::max(0.0, t - 0.25), 4.0) / 4.0;
+  // Right: arrives open at the pinch and closes it in kGripClosingS (0.25 s), then a 4 s cycle open to 80
+  // degrees and back, repeated.
+  const double cycle = std::fmod(std::max(0.0, t - kGripClosingS), 4.0) / 4.0;
   const double angle = 80.0 * M_PI / 180.0 * 0.5 * (1 - std::cos(2 * M_PI * cycle));
   const Pose right = box.lid_pinch_palm(world, Handedness::Right, angle);
   // Left: palm against the base's left side (thumb up), leaving after 10 s.
@@ -130,7 +131,8 @@ std::vector<HandFrame> scenario_frames(const JewelryBox& box, const World& world
   const double away = t < 10 ? 0.0 : 0.3;
   const Quat palm_right(Eigen::AngleAxisd(-0.5 * M_PI, Vec3::UnitZ()));  // palm faces +X
   const Pose left{base.transform(Vec3(-e.x() - 0.02 - away, 0.01, 0.0)), base.orientation * palm_right};
-  return {make_hand_frame(Handedness::Right, right, lid_pinch_shape()), make_hand_frame(Handedness::Left, left)};
+  return {make_hand_frame(Handedness::Right, right, closing_grip(lid_pinch_shape(), t)),
+          make_hand_frame(Handedness::Left, left)};
 }
 
 HandPoseParams lid_pinch_shape() {

@@ -2,6 +2,7 @@
 // and matches the golden value below. When the physics changes on purpose, regenerate it with
 //   HANDSIM_PRINT_GOLDEN=1 build/dev/tests/cpp/test_determinism
 // and paste the printed value here (the Python and native drivers compare against the same number).
+#include "grasp_rules.h"
 #include "handsim/scenes.h"
 
 #include <gtest/gtest.h>
@@ -23,9 +24,9 @@ struct Outcome {
   int grasps = 0;
 };
 
-Outcome run_scenario() {
+Outcome run_scenario(const WorldDef& def = {}) {
   Outcome out;
-  World world;
+  World world(def);
   JewelryBox box = build_jewelry_box(world);
   world.add_hand(HandDef{});
   HandDef left;
@@ -52,3 +53,14 @@ TEST(determinism, ScenarioHashIsRepeatableAndGolden) {
   if (std::getenv("HANDSIM_PRINT_GOLDEN")) std::printf("golden hash: 0x%016llx\n", (unsigned long long)a);
   EXPECT_EQ(a, kGoldenHash) << std::hex << "got 0x" << a << "; regenerate if the physics changed on purpose";
 }
+
+// The scenario's right hand closes its pinch on the lid (closing_grip), so it grasps the lid and swings it open
+// with either grasp rule; only the default world's hash is golden.
+class determinism_rules : public testing::TestWithParam<test::GraspRule> {};
+
+TEST_P(determinism_rules, ScenarioGraspsAndOpensTheLid) {
+  const Outcome out = run_scenario(test::with_rule(GetParam()));
+  EXPECT_GE(out.grasps, 1);
+  EXPECT_GT(out.max_angle, 60 * M_PI / 180);
+}
+HANDSIM_BOTH_GRASP_RULES(determinism_rules);

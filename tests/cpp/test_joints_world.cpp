@@ -1,5 +1,6 @@
 // Jointed objects in the world: hard groups never leave their joint or pass a limit, free joints follow
 // analytic dynamics, the micro-simulator moves a grasped lid, bad joint definitions are rejected.
+#include "grasp_rules.h"
 #include "handsim/scenes.h"
 
 #include <gtest/gtest.h>
@@ -47,6 +48,16 @@ struct Pendulum {
   }
 };
 
+// The hand scripts below close their pinch on the lid (closing_grip) before they swing it: each runs with both
+// grasp rules (grasp_rules.h).
+class JointsWorldHand : public testing::TestWithParam<test::GraspRule> {};
+
+// The lid pinch at `angle`, `t` s after the hand arrived open and began to close it.
+HandFrame pinch(const JewelryBox& box, const World& world, double angle, double t) {
+  return make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
+                         closing_grip(lid_pinch_shape(), t));
+}
+
 }  // namespace
 
 TEST(JointsWorld, CompoundPendulumPeriodMatchesAnalytic) {
@@ -88,9 +99,9 @@ TEST(JointsWorld, FallingPendulumStopsAtItsLimitAndStaysOnTheHinge) {
 // deg jumped to -165 deg in one frame (rate -346 rad/s, overshoot 0) once the hand passed ~180 deg, and
 // limits [-pi, pi] jumped 179 -> -177 deg: the solver took the admissible turn nearest in cost, not the
 // one the lid reaches by moving. No gravity, no table, a static base: the lid stays wherever the hand leaves it.
-TEST(JointsWorld, HingeDraggedPastAStopNearPiStaysAtTheStop) {
+TEST_P(JointsWorldHand, HingeDraggedPastAStopNearPiStaysAtTheStop) {
   for (const double stop : {165 * kDeg, M_PI}) {
-    WorldDef wd;
+    WorldDef wd = test::with_rule(GetParam());
     wd.gravity = Vec3::Zero();
     wd.ground = false;
     World world(wd);
@@ -102,10 +113,9 @@ TEST(JointsWorld, HingeDraggedPastAStopNearPiStaysAtTheStop) {
     const JewelryBox box = build_jewelry_box(world, bd);
     world.add_hand(HandDef{});
     double previous = 0, max_value = 0, max_jump = 0;
-    for (int i = 0; i < 330; ++i) {
-      const double angle = std::clamp((i - 10) / 300.0, 0.0, 1.0) * 200 * kDeg;  // 0 -> 200 deg in 5 s
-      world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
-                                       lid_pinch_shape())});
+    for (int i = 0; i < 340; ++i) {
+      const double angle = std::clamp((i - 20) / 300.0, 0.0, 1.0) * 200 * kDeg;  // 0 -> 200 deg in 5 s
+      world.step(kDt, {pinch(box, world, angle, i * kDt)});
       const JointState s = world.joint_state(box.hinge);
       max_jump = std::max(max_jump, std::abs(s.value - previous));
       max_value = std::max(max_value, s.value);
@@ -200,20 +210,18 @@ TEST(JointsWorld, GroupRidesOnItsParent) {
   EXPECT_LE(s.violation, 1e-12);
 }
 
-TEST(JointsWorld, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHinge) {
-  World world;
+TEST_P(JointsWorldHand, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHinge) {
+  World world(test::with_rule(GetParam()));
   JewelryBox box = build_jewelry_box(world);
   HandId hand = world.add_hand(HandDef{});
-  const HandPoseParams shape = lid_pinch_shape();
   double max_value = 0, max_violation = 0;
   bool grasped = false;
-  // Close in for 10 frames, then swing the hand 180 degrees about the hinge over 3 s, and back, and again:
+  // Close in for 20 frames, then swing the hand 180 degrees about the hinge over 3 s, and back, and again:
   // 10,000 frames in all.
   for (int i = 0; i < 10000; ++i) {
-    const double phase = std::max(0, i - 10) / 180.0;  // 3 s per half swing
+    const double phase = std::max(0, i - 20) / 180.0;  // 3 s per half swing
     const double angle = M_PI * (1 - std::cos(M_PI * std::fmod(phase, 2.0))) / 2;
-    const Pose palm = box.lid_pinch_palm(world, Handedness::Right, angle);
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm, shape)});
+    world.step(kDt, {pinch(box, world, angle, i * kDt)});
     const JointState s = world.joint_state(box.hinge);
     grasped = grasped || world.body_grasp(box.lid).grasped;
     max_value = std::max(max_value, s.value);
@@ -227,14 +235,13 @@ TEST(JointsWorld, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHinge) {
   EXPECT_LE(max_violation, 1e-9);
 }
 
-TEST(JointsWorld, GraspedLidFollowsTheHandArcWithinLimits) {
-  World world;
+TEST_P(JointsWorldHand, GraspedLidFollowsTheHandArcWithinLimits) {
+  World world(test::with_rule(GetParam()));
   JewelryBox box = build_jewelry_box(world);
   world.add_hand(HandDef{});
-  const HandPoseParams shape = lid_pinch_shape();
-  for (int i = 0; i < 70; ++i) {
-    const double angle = std::clamp((i - 10) / 60.0, 0.0, 1.0) * 60 * kDeg;
-    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle), shape)});
+  for (int i = 0; i < 80; ++i) {
+    const double angle = std::clamp((i - 20) / 60.0, 0.0, 1.0) * 60 * kDeg;
+    world.step(kDt, {pinch(box, world, angle, i * kDt)});
   }
   const JointState s = world.joint_state(box.hinge);
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
@@ -429,21 +436,20 @@ TEST(JointsWorld, RemovedJointLeavesAFreeBodyWithItsVelocity) {
   EXPECT_NEAR((p.world.body_linear_velocity(p.rod) - v).norm(), 9.81 * kDt, 0.05);
 }
 
-TEST(JointsWorld, PaperPipelineOpensTheLidLikeTheLeanOne) {
+TEST_P(JointsWorldHand, PaperPipelineOpensTheLidLikeTheLeanOne) {
   // Same hand script through both pipelines: the lean one (closed-form contacts, culling, exact solver)
   // and the paper's (Bullet particle objects, every stage every step, Ceres LM when built).
-  auto run = [](bool paper) {
-    WorldDef wd;
+  auto run = [this](bool paper) {
+    WorldDef wd = test::with_rule(GetParam());
     wd.paper_pipeline = paper;
     if (paper) wd.particle_contacts = WorldDef::ParticleContacts::BulletObjects;
     World world(wd);
     JewelryBox box = build_jewelry_box(world);
     world.add_hand(HandDef{});
     bool grasped = false;
-    for (int i = 0; i < 70; ++i) {
-      const double angle = std::clamp((i - 10) / 60.0, 0.0, 1.0) * 60 * kDeg;
-      world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
-                                       lid_pinch_shape())});
+    for (int i = 0; i < 80; ++i) {
+      const double angle = std::clamp((i - 20) / 60.0, 0.0, 1.0) * 60 * kDeg;
+      world.step(kDt, {pinch(box, world, angle, i * kDt)});
       grasped = grasped || world.body_grasp(box.lid).grasped;
       EXPECT_LE(world.joint_state(box.hinge).violation, 1e-9);
     }
@@ -454,3 +460,5 @@ TEST(JointsWorld, PaperPipelineOpensTheLidLikeTheLeanOne) {
   EXPECT_NEAR(lean, 60 * kDeg, 2 * kDeg);
   EXPECT_NEAR(paper, lean, 2 * kDeg);
 }
+
+HANDSIM_BOTH_GRASP_RULES(JointsWorldHand);

@@ -5,8 +5,9 @@
 // last window is no worse than the first. HANDSIM_SOAK_CSV=path also writes the per-window table as CSV.
 //
 // The script, 360 frames (6 s at 60 Hz) per cycle, both hands HandDef defaults:
-//   right hand    0- 40  at the pinch on the closed lid's lip (lid_pinch_palm, lid_pinch_shape; it arrives
-//                        there in one frame, as in scenario_frames) and grasps it
+//   right hand    0- 40  at the pinch on the closed lid's lip (lid_pinch_palm; it arrives there open in one
+//                        frame and closes to lid_pinch_shape in closing_grip's 0.25 s, as in scenario_frames)
+//                        and grasps it
 //                40-150  swings it open to A (cosine ease), 150-180 holds it there; A = 45..85 deg and the
 //                        pinch's place along the lip (+-2 cm) change every cycle (golden-ratio sequences), so
 //                        no two cycles are the same
@@ -25,6 +26,8 @@
 // of R0^-1 R(t) (radians). It is sampled on the "holding" frames only — from 10 frames after the swing starts
 // until the release starts (frames 50-180 of every cycle, plus 180-300 of even cycles) — so that the intended
 // release motion is not counted as error. The lid must be grasped on every holding frame.
+// It runs with both grasp rules (grasp_rules.h); HANDSIM_SOAK_CSV is written by the run with the default one.
+#include "grasp_rules.h"
 #include "handsim/scenes.h"
 
 #include <gtest/gtest.h>
@@ -51,12 +54,13 @@ long env_or(const char* name, long fallback) {
 
 double ease(double x) { return 0.5 * (1 - std::cos(M_PI * std::clamp(x, 0.0, 1.0))); }
 
-// The right hand's commanded hinge angle, lift (along the lid's normal), how far its thumb has let go of the
-// lip (0 pinching .. 1 thumb fully back: lid_pinch_shape's thumb_opposition 0.5 -> 0) for frame i, and
-// whether the script is holding the lid.
+// The right hand's commanded hinge angle, lift (along the lid's normal), how long ago it began to close its pinch
+// and how far it has opened it again to let go of the lip (0 pinching .. 1 open: open_grip of lid_pinch_shape)
+// for frame i, and whether the script is holding the lid.
 struct Command {
   double angle = 0;
   double lift = 0;
+  double closing_s = kGripClosingS;  // closing_grip's t: the pinch is closed from kGripClosingS on
   double let_go = 0;
   double shift = 0;  // m, sideways along the lip (the base's x axis)
   bool holding = false;
@@ -64,7 +68,7 @@ struct Command {
 
 constexpr double kAway = 0.06;
 
-// A release that starts at frame u0 of the cycle: the thumb lets go in 12 frames, then the hand rises.
+// A release that starts at frame u0 of the cycle: the hand opens in 12 frames, then rises.
 void release(Command& c, int u, int u0) {
   c.let_go = ease((u - u0) / 12.0);
   c.lift = kAway * ease((u - u0 - 12) / 18.0);
@@ -85,7 +89,7 @@ Command command(long i) {
   Command c;
   c.shift = 0.02 * (2 * cycle_fraction(cycle, 0.3819660112501051) - 1);
   if (u < 40) {
-    // at the pinch (the hand arrives there in one frame, as in scenario_frames)
+    c.closing_s = u * kDt;  // at the pinch, closing it (the hand arrives there open in one frame)
   } else if (u < 150) {
     c.angle = open * ease((u - 40) / 110.0);
   } else if (u < 180) {
@@ -111,12 +115,17 @@ bool finite(const Pose& p) { return p.position.allFinite() && p.orientation.coef
 
 }  // namespace
 
-TEST(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
+class soak : public testing::TestWithParam<test::GraspRule> {};
+
+TEST_P(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
   const long frames = env_or("HANDSIM_SOAK_FRAMES", 10000);
   const long window = env_or("HANDSIM_SOAK_WINDOW", std::max(1L, frames / 10));
   ASSERT_GE(frames, 2 * kCycle);
 
-  World world;
+  const WorldDef def = test::with_rule(GetParam());
+  const bool default_rule = def.grasp.closing_distance == GraspSettings{}.closing_distance &&
+                            def.grasp.opening_distance == GraspSettings{}.opening_distance;
+  World world(def);
   const JewelryBox box = build_jewelry_box(world);
   const HandId right = world.add_hand(HandDef{});
   HandDef left_def;
@@ -136,8 +145,8 @@ TEST(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
     const Command c = command(i);
     Pose palm = box.lid_pinch_palm(world, Handedness::Right, c.angle, c.lift);
     palm.position += world.body_pose(box.base).orientation * Vec3(c.shift, 0, 0);
-    HandPoseParams shape = lid_pinch_shape();
-    shape.thumb_opposition *= 1 - c.let_go;
+    const HandPoseParams shape =
+        c.let_go > 0 ? open_grip(lid_pinch_shape(), c.let_go) : closing_grip(lid_pinch_shape(), c.closing_s);
     world.step(kDt, {make_hand_frame(Handedness::Right, palm, shape), left});
 
     for (BodyId b : world.bodies()) {
@@ -179,7 +188,8 @@ TEST(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
   for (const Window& w : windows)
     std::printf("%9ld %9ld %13.3g %11.3g %14.3g %12.3g %7ld %10ld %11.3g\n", w.first, w.last, w.violation,
                 w.overshoot, w.grasp_error, w.grasp_angle, w.grasps, w.holding_ungrasped, w.base_moved);
-  if (const char* path = std::getenv("HANDSIM_SOAK_CSV")) {
+  const char* path = std::getenv("HANDSIM_SOAK_CSV");
+  if (path && default_rule) {
     FILE* f = std::fopen(path, "w");
     ASSERT_NE(f, nullptr) << path;
     std::fprintf(f, "first,last,violation_m,overshoot_rad,grasp_error_m,grasp_error_rad,grasps,"
@@ -205,3 +215,4 @@ TEST(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
   }
   EXPECT_LT(first.grasp_error, 1e-3);  // the hand really holds the lid: under 1 mm of slide
 }
+HANDSIM_BOTH_GRASP_RULES(soak);

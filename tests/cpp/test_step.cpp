@@ -317,10 +317,12 @@ TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
 // A hand pressed down onto the 4 cm cube on the ground, `depth` (m) below its top: the skin beside the cube's
 // edges touches opposite side faces, all of it one rigid part (the palm, or the edge of the hand as in the
 // Leap recording three-claps). `turn` rotates the hand about its finger axis (0: palm down). Lowered over 20
-// frames, then held for 30; returns the GraspBegin count. The particle count is explicit (the default may change).
+// frames, then held for 30; returns the GraspBegin count. The particle count is explicit (the default may change),
+// and the closing rule is off (a hand pressed down does not close, so it would not grasp whatever the parts).
 int grasps_pressing_down(double turn, double depth, bool across_parts) {
   WorldDef def;
   def.grasp.across_parts = across_parts;
+  def.grasp.closing_distance = 0;
   World world(def);
   HandDef hand_def;
   hand_def.particle_count = 1182;
@@ -442,8 +444,8 @@ TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
 }
 
 // Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
-// one grasp begins and ends. Without hysteresis (1 frame each way, no release margin) the same input flickers,
-// which shows that the count would catch it.
+// one grasp begins and ends. Without hysteresis (1 frame each way, no release margin, no closing rule: the
+// dithering thumb does not close by 1.5 cm) the same input flickers, which shows that the count would catch it.
 int dithering_grasp_events(const GraspSettings& grasp) {
   WorldDef def;
   def.grasp = grasp;
@@ -459,6 +461,8 @@ TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
   none.grasp_time_s = 0;
   none.release_time_s = 0;
   none.release_distance = 0;
+  none.closing_distance = 0;
+  none.opening_distance = 0;
   EXPECT_GE(dithering_grasp_events(none), 40);
 }
 

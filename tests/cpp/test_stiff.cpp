@@ -1,6 +1,7 @@
 // The user's second demand: numerical stability on stiff and extreme cases. Each case states what must
 // happen; all of them also check that every state stays finite, the hinge holds (violation <= 1e-9 x scene
 // size) and its limits are respected.
+#include "grasp_rules.h"
 #include "handsim/scenes.h"
 #include "pose_fit.h"
 
@@ -19,6 +20,9 @@ constexpr double kDeg = M_PI / 180.0;
 
 bool finite(const Pose& p) { return p.position.allFinite() && p.orientation.coeffs().allFinite(); }
 
+// Every case runs with both grasp rules (grasp_rules.h); the running case's rule, for Scene.
+test::GraspRule g_rule = test::GraspRule::Contacts;
+
 // The jewelry box with one right hand, and the checks every case shares.
 struct Scene {
   World world;
@@ -26,8 +30,9 @@ struct Scene {
   HandId hand;
   double size = 1.0;  // scene scale, for the violation bound
   double max_violation = 0;
+  double time = 0;  // s since the hand arrived at the lip: its pinch closes (closing_grip) over kGripClosingS
 
-  explicit Scene(JewelryBoxDef def = {}, WorldDef wd = {}) : world(wd) {
+  explicit Scene(JewelryBoxDef def = {}, WorldDef wd = {}) : world(test::with_rule(g_rule, wd)) {
     box = build_jewelry_box(world, def);
     hand = world.add_hand(HandDef{});
   }
@@ -35,11 +40,12 @@ struct Scene {
   HandFrame pinch(double angle, double lift = 0, const Vec3& offset = Vec3::Zero()) const {
     Pose palm = box.lid_pinch_palm(world, Handedness::Right, angle, lift);
     palm.position += offset;
-    return make_hand_frame(Handedness::Right, palm, lid_pinch_shape());
+    return make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), time));
   }
 
   void step(double dt, const std::vector<HandFrame>& frames) {
     world.step(dt, frames);
+    time += dt;
     check();
   }
 
@@ -77,24 +83,31 @@ void expect_rejected(const World& world, const std::function<void()>& call, Stat
   EXPECT_EQ(world.joints().size(), joints) << argument;
 }
 
+class stiff : public testing::TestWithParam<test::GraspRule> {
+ protected:
+  void SetUp() override { g_rule = GetParam(); }
+};
+
 }  // namespace
 
-TEST(stiff, HandTeleports1mAnd100mInOneFrame) {
+TEST_P(stiff, HandTeleports1mAnd100mInOneFrame) {
   Scene s;
-  for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});
-  ASSERT_TRUE(s.world.body_grasp(s.box.lid).grasped);
-  // The lid is grasped; the hand jumps away. The hinge holds; the contacts vanish and the grasp ends.
+  // The lid is grasped; the hand jumps away. The hinge holds; the contacts vanish and the grasp ends. The hand
+  // comes back open and closes its pinch again.
   for (double jump : {1.0, 100.0}) {
+    s.time = 0;
+    for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});
+    ASSERT_TRUE(s.world.body_grasp(s.box.lid).grasped) << jump;
     for (int i = 0; i < 10; ++i) s.step(kDt, {s.pinch(0, jump)});
     EXPECT_FALSE(s.world.body_grasp(s.box.lid).grasped) << jump;
-    for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});
+    for (int i = 0; i < 60; ++i) s.step(kDt, {s.pinch(0, jump)});  // away while the lid settles
   }
 }
 
-TEST(stiff, TrackingLostFor1_30_300FramesThenBack) {
+TEST_P(stiff, TrackingLostFor1_30_300FramesThenBack) {
   for (int lost : {1, 30, 300}) {
     Scene s;
-    for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(10 * kDeg * std::min(1.0, i / 20.0))});
+    for (int i = 0; i < 35; ++i) s.step(kDt, {s.pinch(10 * kDeg * std::clamp((i - 15) / 20.0, 0.0, 1.0))});
     ASSERT_TRUE(s.world.body_grasp(s.box.lid).grasped);
     HandFrame gone = s.pinch(0);
     gone.joints[kPalm].valid = false;
@@ -106,7 +119,7 @@ TEST(stiff, TrackingLostFor1_30_300FramesThenBack) {
   }
 }
 
-TEST(stiff, BadFramesAndTimeStepsAreRejectedAndChangeNothing) {
+TEST_P(stiff, BadFramesAndTimeStepsAreRejectedAndChangeNothing) {
   Scene s;
   for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
   const uint64_t hash = s.world.state_hash();
@@ -138,8 +151,9 @@ TEST(stiff, BadFramesAndTimeStepsAreRejectedAndChangeNothing) {
   s.step(kDt, {f});
 }
 
-TEST(stiff, ExtremeTimeSteps) {
+TEST_P(stiff, ExtremeTimeSteps) {
   Scene s;
+  for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});  // the pinch closes at 60 Hz first
   for (double dt : {1.0, 1e-6, 1e-6, 0.5, kDt}) {
     for (int i = 0; i < 5; ++i) s.step(dt, {s.pinch(0)});
   }
@@ -147,7 +161,7 @@ TEST(stiff, ExtremeTimeSteps) {
   EXPECT_TRUE(s.world.body_grasp(s.box.lid).grasped);
 }
 
-TEST(stiff, MassRatio1To1000BetweenLidAndBase) {
+TEST_P(stiff, MassRatio1To1000BetweenLidAndBase) {
   for (double lid_mass : {0.0005, 500.0}) {
     JewelryBoxDef def;
     def.base_mass = 0.5;
@@ -174,9 +188,9 @@ TEST(stiff, MassRatio1To1000BetweenLidAndBase) {
   }
 }
 
-TEST(stiff, LimitOverdriveAt10MetresPerSecond) {
+TEST_P(stiff, LimitOverdriveAt10MetresPerSecond) {
   Scene s;
-  for (int i = 0; i < 15; ++i) s.step(kDt, {s.pinch(0)});
+  for (int i = 0; i < 20; ++i) s.step(kDt, {s.pinch(0)});
   ASSERT_TRUE(s.world.body_grasp(s.box.lid).grasped);
   // The grasp point is ~0.2 m from the hinge; 10 m/s there is 50 rad/s: 180 degrees in ~4 frames.
   for (int round = 0; round < 5; ++round)
@@ -186,7 +200,7 @@ TEST(stiff, LimitOverdriveAt10MetresPerSecond) {
     }
 }
 
-TEST(stiff, ContactsWithin1umOfTheHingeAxisAreDegenerateNotNaN) {
+TEST_P(stiff, ContactsWithin1umOfTheHingeAxisAreDegenerateNotNaN) {
   // A hinge whose child's vertices all lie within 1 um of the axis: the micro-simulator cannot see the
   // rotation and must keep the previous angle.
   World world;
@@ -211,7 +225,7 @@ TEST(stiff, ContactsWithin1umOfTheHingeAxisAreDegenerateNotNaN) {
   }
 }
 
-TEST(stiff, HandSpawnedInsideTheBoxAndSwipingThroughAt10MetresPerSecond) {
+TEST_P(stiff, HandSpawnedInsideTheBoxAndSwipingThroughAt10MetresPerSecond) {
   Scene s;
   const Vec3 centre = s.world.body_pose(s.box.base).position;
   // Spawned inside the base: pushes it out, never NaN.
@@ -224,7 +238,7 @@ TEST(stiff, HandSpawnedInsideTheBoxAndSwipingThroughAt10MetresPerSecond) {
   }
 }
 
-TEST(stiff, GraspDitheringEveryFrameDoesNotFlicker) {
+TEST_P(stiff, GraspDitheringEveryFrameDoesNotFlicker) {
   Scene s;
   int events = 0;
   for (int i = 0; i < 240; ++i) {
@@ -236,7 +250,7 @@ TEST(stiff, GraspDitheringEveryFrameDoesNotFlicker) {
   EXPECT_LE(events, 4);
 }
 
-TEST(stiff, SceneFarFromTheOriginAndScaled) {
+TEST_P(stiff, SceneFarFromTheOriginAndScaled) {
   struct Case {
     Vec3 origin;
     double scale;
@@ -247,13 +261,13 @@ TEST(stiff, SceneFarFromTheOriginAndScaled) {
     WorldDef wd;
     Scene s(def, wd);
     s.size = std::max(1.0, c.origin.norm());
-    for (int i = 0; i < 90; ++i) s.step(kDt, {s.pinch(60 * kDeg * std::clamp((i - 15) / 60.0, 0.0, 1.0))});
+    for (int i = 0; i < 90; ++i) s.step(kDt, {s.pinch(60 * kDeg * std::clamp((i - 20) / 60.0, 0.0, 1.0))});
     EXPECT_TRUE(s.world.body_grasp(s.box.lid).grasped) << c.origin.transpose();
     EXPECT_NEAR(s.world.joint_state(s.box.hinge).value, 60 * kDeg, 3 * kDeg) << c.origin.transpose();
   }
 }
 
-TEST(stiff, TinyAndHugeBoxesKeepTheirHinge) {
+TEST_P(stiff, TinyAndHugeBoxesKeepTheirHinge) {
   for (double scale : {1e-3, 1e3}) {
     JewelryBoxDef def;
     def.position *= scale;
@@ -275,22 +289,22 @@ TEST(stiff, TinyAndHugeBoxesKeepTheirHinge) {
   }
 }
 
-TEST(stiff, TenThousandParticles) {
-  World world;
+TEST_P(stiff, TenThousandParticles) {
+  World world(test::with_rule(g_rule));
   JewelryBox box = build_jewelry_box(world);
   HandDef hd;
   hd.particle_count = 10000;
   world.add_hand(hd);
   EXPECT_EQ(world.hand_model(world.hands()[0]).particle_count(), 10000);
-  for (int i = 0; i < 60; ++i) {
-    const Pose palm = box.lid_pinch_palm(world, Handedness::Right, 45 * kDeg * std::clamp((i - 10) / 40.0, 0.0, 1.0));
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm, lid_pinch_shape())});
+  for (int i = 0; i < 70; ++i) {
+    const Pose palm = box.lid_pinch_palm(world, Handedness::Right, 45 * kDeg * std::clamp((i - 20) / 40.0, 0.0, 1.0));
+    world.step(kDt, {make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), i * kDt))});
     ASSERT_LE(world.joint_state(box.hinge).violation, 1e-9);
   }
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
 }
 
-TEST(stiff, ZeroAndNegativeMassAndSize) {
+TEST_P(stiff, ZeroAndNegativeMassAndSize) {
   Scene s;
   for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
   struct Case {
@@ -342,7 +356,7 @@ TEST(stiff, ZeroAndNegativeMassAndSize) {
   EXPECT_EQ(f.world.body_pose(f.box.base).position, base.position);
 }
 
-TEST(stiff, LowerAboveUpperAndOutOfRangeLimits) {
+TEST_P(stiff, LowerAboveUpperAndOutOfRangeLimits) {
   Scene s;
   for (int i = 0; i < 5; ++i) s.step(kDt, {s.pinch(0)});
   // A second box's definition, and a hinge between two new free bodies: both rejected before anything is added.
@@ -375,20 +389,20 @@ TEST(stiff, LowerAboveUpperAndOutOfRangeLimits) {
   JewelryBoxDef locked;
   locked.lower = locked.upper = 0;
   Scene l(locked);
-  for (int i = 0; i < 60; ++i) l.step(kDt, {l.pinch(60 * kDeg * std::clamp((i - 15) / 40.0, 0.0, 1.0))});
+  for (int i = 0; i < 65; ++i) l.step(kDt, {l.pinch(60 * kDeg * std::clamp((i - 20) / 40.0, 0.0, 1.0))});
   EXPECT_EQ(l.world.joint_state(l.box.hinge).value, 0.0);
   JewelryBoxDef turn;
   turn.lower = -M_PI;
   turn.upper = M_PI;
   Scene t(turn);
-  for (int i = 0; i < 120; ++i) {
-    t.step(kDt, {t.pinch(170 * kDeg * std::clamp((i - 15) / 90.0, 0.0, 1.0))});
+  for (int i = 0; i < 125; ++i) {
+    t.step(kDt, {t.pinch(170 * kDeg * std::clamp((i - 20) / 90.0, 0.0, 1.0))});
     ASSERT_LE(t.world.joint_state(t.box.hinge).violation, 1e-9);
   }
   EXPECT_GT(t.world.joint_state(t.box.hinge).value, 150 * kDeg);
 }
 
-TEST(stiff, StaleAndForeignIds) {
+TEST_P(stiff, StaleAndForeignIds) {
   Scene s;
   BodyDef cube;
   cube.shape = ShapeDef::box(Vec3(0.03, 0.03, 0.03));
@@ -450,7 +464,7 @@ TEST(stiff, StaleAndForeignIds) {
   EXPECT_NEAR(s.world.joint_state(s.box.hinge).value, 30 * kDeg, 3 * kDeg);
 }
 
-TEST(stiff, ZeroOneTwoAndCollinearContactsInTheEq2Solve) {
+TEST_P(stiff, ZeroOneTwoAndCollinearContactsInTheEq2Solve) {
   // The object-centred pose update (eq. 2) with too few contacts to fix all 6 DOFs gets the minimal-norm
   // motion: nothing for 0 contacts, a pure translation for 1, centroid translation plus the shortest arc
   // for 2 or any number on one line (the twist about the line stays 0). Never NaN, also 10 km out.
@@ -504,6 +518,7 @@ namespace {
 struct TwoHands {
   Scene s;
   HandId left;
+  static constexpr double left_from = 20 * kDt;  // the left hand arrives (and begins to close) 20 frames in
   explicit TwoHands(bool hinged) {
     HandDef l;
     l.handedness = Handedness::Left;
@@ -519,7 +534,9 @@ struct TwoHands {
       const double sign = h == Handedness::Right ? 1.0 : -1.0;
       Pose palm = s.box.lid_pinch_palm(s.world, h, angle, lift);
       palm.position += sign * (0.05 + apart) * side;
-      f.push_back(make_hand_frame(h, palm, lid_pinch_shape()));
+      // each hand closes its pinch from the frame it arrives
+      const double closing_s = h == Handedness::Right ? s.time : s.time - left_from;
+      f.push_back(make_hand_frame(h, palm, closing_grip(lid_pinch_shape(), closing_s)));
     }
     return f;
   }
@@ -527,15 +544,15 @@ struct TwoHands {
 
 }  // namespace
 
-TEST(stiff, TwoHandsPullAGraspedObjectApart) {
+TEST_P(stiff, TwoHandsPullAGraspedObjectApart) {
   for (bool hinged : {true, false}) {
     SCOPED_TRACE(hinged ? "hinged lid" : "free lid");
     TwoHands t(hinged);
     Scene& s = t.s;
     const HandId right = s.hand;
-    // The right hand grasps first, the left joins 15 frames later.
-    for (int i = 0; i < 15; ++i) s.step(kDt, t.frames(0, 0, 0, false));
-    for (int i = 0; i < 15; ++i) s.step(kDt, t.frames(0, 0, 0));
+    // The right hand grasps first, the left joins 20 frames later.
+    for (int i = 0; i < 20; ++i) s.step(kDt, t.frames(0, 0, 0, false));
+    for (int i = 0; i < 20; ++i) s.step(kDt, t.frames(0, 0, 0));
     GraspInfo g = s.world.body_grasp(s.box.lid);
     ASSERT_TRUE(g.grasped);
     EXPECT_EQ(g.primary, right);
@@ -587,3 +604,5 @@ TEST(stiff, TwoHandsPullAGraspedObjectApart) {
     }
   }
 }
+
+HANDSIM_BOTH_GRASP_RULES(stiff);

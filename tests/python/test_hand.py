@@ -419,8 +419,13 @@ def test_rejected_step_leaves_the_world_unchanged():
 
 
 def test_grasp_events_and_stage_reports():
-    """A thin plate slicing through the flat fingers is touched from both faces: an opposing grasp (eq. 3)."""
-    world = handsim.World(handsim.WorldDef(ground=False, gravity=[0, 0, 0]))
+    """A thin plate slicing through the flat fingers is touched from both faces: an opposing grasp (eq. 3). The
+    hand does not close, so this is eq. 3 without the closing rule (which would rightly refuse it)."""
+    wd = handsim.WorldDef(ground=False, gravity=[0, 0, 0])
+    g = wd.grasp
+    g.closing_distance = g.opening_distance = 0.0
+    wd.grasp = g
+    world = handsim.World(wd)
     hand = world.add_hand(handsim.HandDef())
     plate = world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05, 0.001, 0.02]), mass=0.1,
                                            pose=[0, 0.5, -0.08, 0, 0, 0, 1]))

@@ -24,9 +24,11 @@ def _jewelry_world():
     return world, box, hand
 
 
-def _lid_pinch(world, box, lift=0.0):
+def _lid_pinch(world, box, lift=0.0, t=handsim.GRIP_CLOSING_S):
+    """The lid pinch, `t` s after the hand began to close it (closing_grip)."""
     palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, 0.0, lift)
-    return handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=handsim.lid_pinch_shape())
+    return handsim.make_hand_frame(handsim.Handedness.RIGHT, palm,
+                                   params=handsim.closing_grip(handsim.lid_pinch_shape(), t))
 
 
 def _pinch_recording(steps=40):
@@ -34,7 +36,7 @@ def _pinch_recording(steps=40):
     rec = recording.Recorder("jewelry_box", hands=[handsim.HandDef(handedness=handsim.Handedness.RIGHT)])
     box = rec.scene.box
     for i in range(steps):
-        rec.step(1 / 60, [_lid_pinch(rec.world, box, lift=0.0004 * i)])
+        rec.step(1 / 60, [_lid_pinch(rec.world, box, lift=0.0004 * i, t=i / 60)])
     return rec.recording
 
 
@@ -95,7 +97,7 @@ def test_grasped_body_is_highlighted_and_events_are_labelled():
     d = scene.Describer(world, {"base": box.base, "lid": box.lid, "hinge": box.hinge})
     grasped_frame = None
     for i in range(60):
-        world.step(1 / 60, [_lid_pinch(world, box, 0.0005 * i)])
+        world.step(1 / 60, [_lid_pinch(world, box, 0.0005 * i, i / 60)])
         f = d.frame()
         if world.body_grasp(box.lid).grasped and grasped_frame is None:
             grasped_frame = f

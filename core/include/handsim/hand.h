@@ -77,6 +77,20 @@ HandFrame make_hand_frame(Handedness handedness, const Pose& palm_pose, const Ha
 // The flat hand at the identity palm pose: the bind pose of the procedural mesh.
 HandFrame bind_frame(Handedness handedness, double scale = 1.0);
 
+// People close their hand onto what they grasp: they reach with it open and close the grip over the last few
+// tenths of a second (GraspSettings::closing_distance begins a grasp only while a hand closes), and open it
+// to let go. Every synthetic scene (tests, scenes, benches, simulated users) shapes its grips through these,
+// so none relies on a hand that appears already shaped round its object.
+// `grip` opened by `openness`: 0 the grip itself, 1 the open hand (every curl and the thumb's opposition 0;
+// spread and scale kept), each parameter linearly in between. Throws Error naming "openness" outside 0..1.
+HandPoseParams open_grip(const HandPoseParams& grip, double openness);
+// 0.25 s: a reach-to-grasp closes its aperture over about the last quarter second of the reach.
+constexpr double kGripClosingS = 0.25;
+// The grip `t` s after the hand began to close it over `duration` s, with the minimum-jerk profile of a
+// reaching movement: open for t <= 0, the grip itself from t >= duration. Throws Error naming "t" (not
+// finite) or "duration" (not > 0).
+HandPoseParams closing_grip(const HandPoseParams& grip, double t, double duration = kGripClosingS);
+
 // Throws Error naming e.g. "frame.joints[7].orientation" when a valid joint has a non-finite position,
 // a non-unit quaternion or a negative radius. Invalid joints are ignored (NaN there is legal).
 void validate_frame(const HandFrame& frame, const std::string& argument);

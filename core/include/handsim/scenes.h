@@ -52,8 +52,8 @@ HandPoseParams lid_pinch_shape();
 
 // The scripted two-hand jewelry-box scenario that determinism tests and every driver (C++, Python, C, C#)
 // replay: frame i (60 Hz) of a world built with build_jewelry_box(world) and, in this order, a right and a
-// left hand (HandDef defaults). The right hand pinches the lid, swings it open to 80 deg and back; the left
-// hand rests on the base's side, then leaves. kScenarioFrames frames make one run.
+// left hand (HandDef defaults). The right hand arrives open at the lid's lip and closes its pinch there
+// (closing_grip), swings the lid open to 80 deg and back; the left hand rests on the base's side, then leaves. kScenarioFrames frames make one run.
 constexpr int kScenarioFrames = 1000;
 std::vector<HandFrame> scenario_frames(const JewelryBox& box, const World& world, int frame);
 

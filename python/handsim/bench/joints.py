@@ -299,7 +299,7 @@ DRAG_DEG = 180.0  # the hand swings its grip on the lid this far: 90 deg past th
 # One drag out to DRAG_DEG and back, at 60 Hz. Only one: a second drag would start with the hand sweeping
 # back down onto the closed lid, a different grasp.
 DRAG_FRAMES = 240
-SETTLE_FRAMES = 15  # the hand holds still on the closed lid first, so the grasp can form
+SETTLE_FRAMES = 20  # the hand holds still on the closed lid first, closing its pinch (closing_grip), so the grasp can form
 JEWELRY_BASE_MASS = handsim.JewelryBoxDef().base_mass
 
 
@@ -318,11 +318,12 @@ def run_group(model, iterations, base_mass=0.0):
     base_start = world.body_pose(box.base)[:3]
     base_moved = 0.0
     world.add_hand(handsim.HandDef())
-    shape = handsim.lid_pinch_shape()
+    pinch = handsim.lid_pinch_shape()
     frames = SETTLE_FRAMES + DRAG_FRAMES
     violation, overshoot, angle, grasped = np.empty(frames), np.empty(frames), np.empty(frames), 0
     for frame in range(frames):
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, drag_angle(frame))
+        shape = handsim.closing_grip(pinch, frame / 60)
         world.step(1 / 60, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
         state = world.joint_state(box.hinge)
         violation[frame], overshoot[frame], angle[frame] = state.violation, state.overshoot, state.value

@@ -40,7 +40,7 @@ from . import format_table
 DT = 1 / 60
 FRAMES = 120
 OPEN_DEG = 80.0
-SETTLE = 15  # handsim lid: still frames on the closed lid first, so the pinch becomes a grasp
+SETTLE = 20  # handsim lid: still frames on the closed lid first, closing the pinch (closing_grip), so it becomes a grasp
 
 # The jewelry box of scenes.cpp (JewelryBoxDef defaults), base bottom centre at the origin.
 BASE_HALF = (0.09, 0.035, 0.06)
@@ -129,8 +129,9 @@ class HandsimLid:
         shape = handsim.lid_pinch_shape()
         R = handsim.Handedness.RIGHT
         frames = [handsim.make_hand_frame(R, box.lid_pinch_palm(world, R, a), params=shape) for a in _angles()]
-        for _ in range(SETTLE):
-            world.step(DT, [frames[0]])
+        for k in range(SETTLE):
+            palm = box.lid_pinch_palm(world, R, _angles()[0])
+            world.step(DT, [handsim.make_hand_frame(R, palm, params=handsim.closing_grip(shape, k * DT))])
         self.world, self.box, self.frames = world, box, frames
 
     def frame(self, i):

@@ -20,9 +20,9 @@ R = _h.Handedness.RIGHT
 
 def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015,
                            hand_def=None):
-    """A right hand pinches the closed lid (lid_pinch_palm, lid_pinch_shape) with its palm `depth_m` closer
-    to the hinge than the scene's pose, so the thumb grazes the base's front face, and swings the lid open
-    over one second. Returns (base displacement m, max particles touching the base, lid grasped). `hand_def`:
+    """A right hand arrives open at the closed lid and closes its pinch there (lid_pinch_palm, closing_grip of
+    lid_pinch_shape) with its palm `depth_m` closer to the hinge than the scene's pose, so the thumb grazes the
+    base's front face, and swings the lid open over one second. Returns (base displacement m, max particles touching the base, lid grasped). `hand_def`:
     a right-hand HandDef (default: HandDef())."""
     w = _h.World()
     d = _h.JewelryBoxDef()
@@ -31,13 +31,13 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
     hand = w.add_hand(hand_def or _h.HandDef())
     b0 = np.asarray(w.body_pose(box.base), float)
     touching, grasped = 0, False
-    shape = _h.lid_pinch_shape()
-    for i in range(100):
-        angle = min(max((i - 10) / 60, 0.0), 1.0) * math.radians(swing_deg)
+    pinch = _h.lid_pinch_shape()
+    for i in range(110):
+        angle = min(max((i - 20) / 60, 0.0), 1.0) * math.radians(swing_deg)
         p = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
         p[:3] += quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
         p = _users.swing_pose(p, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
-        w.step(1 / 60, [_h.make_hand_frame(R, p, thumb_opposition=shape.thumb_opposition)])
+        w.step(1 / 60, [_h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))])
         touching = max(touching, w.body_contact_count(box.base, hand))
         grasped = grasped or w.body_grasp(box.lid).grasped
     moved = float(np.linalg.norm(np.asarray(w.body_pose(box.base))[:3] - b0[:3]))
@@ -45,8 +45,8 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
 
 
 def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015, hand_def=None):
-    """The hand pinches the lid, swings it (min-jerk, 1.2 s) to `swing_deg`, past the 90 deg limit, and holds
-    still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg).
+    """The hand closes its pinch on the lid (closing_grip), swings it (min-jerk, 1.2 s) to `swing_deg`, past
+    the 90 deg limit, and holds still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg).
     `hand_def`: a right-hand HandDef (default: HandDef())."""
     w = _h.World()
     d = _h.JewelryBoxDef()
@@ -55,10 +55,11 @@ def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 
     w.add_hand(hand_def or _h.HandDef())
     closed = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
     reached, worst = False, 0.0
-    for i in range(200):
-        angle = _users.min_jerk((i - 10) / 72) * math.radians(swing_deg)
+    pinch = _h.lid_pinch_shape()
+    for i in range(210):
+        angle = _users.min_jerk((i - 20) / 72) * math.radians(swing_deg)
         p = _users.swing_pose(closed, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
-        w.step(1 / 60, [_h.make_hand_frame(R, p, thumb_opposition=0.5)])
+        w.step(1 / 60, [_h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))])
         s = w.joint_state(box.hinge)
         reached = reached or s.value >= 0.5 * math.pi - 1e-9
         if reached:
