@@ -4,6 +4,7 @@
 
 #include "grasp.h"
 #include "validate.h"
+#include "world_impl.h"
 
 #include <LinearMath/btConvexHullComputer.h>
 
@@ -346,6 +347,123 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
     face.depth = c.depth;
     faces.push_back(face);
   }
+}
+
+// --- line 3: detect hand collision and contact particles ---
+std::string World::Impl::detect_contacts(double dt) {
+  for (auto& entry : pairs) {
+    entry.second.contacts.clear();
+    entry.second.previous_faces.swap(entry.second.entry_faces);
+    entry.second.entry_faces.clear();
+  }
+  std::vector<ParticleContact>& found = scratch_contacts;  // swapped into the pairs: buffers are reused
+  std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
+  std::vector<std::pair<int, int>>& ranges = scratch_ranges;
+  const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
+  int tested = 0, touching = 0, candidates = 0;
+  for (uint32_t hi = 0; hi < hands.size(); ++hi) {
+    HandSlot& h = hands[hi];
+    if (!h.alive || !h.state.tracked) continue;
+    // A hand far from every body (pose_hands) has no group within reach and cannot touch anything.
+    if (!bullet && !def.paper_pipeline && h.reach_groups_only && h.reach_groups.empty()) continue;
+    const double radius = h.model->particle_radius;
+    if (bullet || def.paper_pipeline) refresh_particles(h, false);
+    if (bullet) collide_bullet_particles(hi, per_body);
+    // The broadphase (the widest margin); the paper pipeline tests every body.
+    if (def.paper_pipeline) {
+      near_bodies.clear();
+      for (uint32_t bi = 0; bi < bodies.size(); ++bi) near_bodies.push_back(bi);
+    } else {
+      bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+    }
+    for (uint32_t bi : near_bodies) {
+      const Vec3 lo = Eigen::Map<const Vec3>(&body_boxes[6 * bi]), hi_b = Eigen::Map<const Vec3>(&body_boxes[6 * bi + 3]);
+      Body& b = bodies[bi];
+      if (!b.alive) continue;
+      // A held object is no longer penetrated; count particles within release_distance as holding it.
+      const double margin = b.held_by(hi) ? def.grasp.release_distance : 0.0;
+      if (!def.paper_pipeline &&
+          !bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
+                          lo, hi_b))
+        continue;
+      ++tested;
+      found.clear();
+      if (bullet) {
+        // The Bullet spheres carry the release margin for every body; unheld bodies need real contact.
+        for (ParticleContact c : per_body[bi]) {
+          c.depth -= def.grasp.release_distance;
+          if (c.depth > -margin) found.push_back(c);
+        }
+        std::stable_sort(found.begin(), found.end(),
+                         [](const ParticleContact& a, const ParticleContact& b) { return a.particle < b.particle; });
+      } else {
+        // The groups within reach of this body were skinned in pose_hands (skin_particles_in_reach); the
+        // ranges below are those groups only.
+        if (def.paper_pipeline) ranges.assign(1, {0, int(h.state.tracked_positions.cols())});
+        else near_particle_ranges(h, radius + margin, lo, hi_b, ranges);
+        for (const auto& r : ranges) candidates += r.second - r.first;
+        collide_particle_ranges(h.state.tracked_positions, ranges, radius + margin, b.prepared, b.pose, found);
+        for (ParticleContact& c : found) c.depth -= margin;  // true depth; held contacts may be slightly < 0
+      }
+      auto key = std::make_pair(hi, bi);
+      auto it = pairs.find(key);
+      if (found.empty() && it == pairs.end()) continue;
+      if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0, {}, {}}).first;
+      keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
+                       it->second.entry_faces, found);
+      it->second.contacts.swap(found);
+      touching += !it->second.contacts.empty();
+    }
+  }
+  if (tested == 0) return "skip: no hand near a body";
+  return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching, " +
+         std::to_string(candidates) + " particle(s) in groups near a body tested";
+}
+
+// The particle index ranges whose group box, grown by the contact reach, overlaps a body's world box: the
+// particles of the other groups are farther than `reach` from the body's bounds, so they cannot touch it.
+void World::Impl::near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
+                                       std::vector<std::pair<int, int>>& ranges) const {
+  ranges.clear();
+  // A little slack over the reach, so a centre exactly at the reach is never dropped by rounding.
+  const Vec3 grow = Vec3::Constant(reach * (1 + 1e-9) + 1e-12);
+  const std::vector<SkinGroup>& groups = h.model->particle_skin.groups;
+  auto consider = [&](size_t g) {
+    const Vec3 lo = Eigen::Map<const Vec3>(&h.group_bounds[6 * g]) - grow;
+    const Vec3 hi = Eigen::Map<const Vec3>(&h.group_bounds[6 * g + 3]) + grow;
+    if (!bounds_overlap(lo, hi, body_lo, body_hi)) return;
+    if (!ranges.empty() && ranges.back().second == groups[g].begin) ranges.back().second = groups[g].end;
+    else ranges.push_back({groups[g].begin, groups[g].end});
+  };
+  // Only the groups skinned within reach of a body can touch one (the others have empty boxes).
+  if (h.reach_groups_only)
+    for (uint32_t g : h.reach_groups) consider(g);
+  else
+    for (size_t g = 0; g < groups.size(); ++g) consider(g);
+}
+
+// The paper's narrow phase: the hand's particles as Bullet sphere objects (radius + release margin) in a
+// collision world holding every body; rebuilt whenever bodies were added or removed.
+void World::Impl::collide_bullet_particles(uint32_t hi, std::vector<std::vector<ParticleContact>>& per_body) {
+  HandSlot& h = hands[hi];
+  if (!h.bullet_particles || h.bullet_version != body_version) {
+    h.bullet_particles = std::make_unique<BulletParticleCollider>(
+        h.model->particle_count(), h.model->particle_radius + def.grasp.release_distance);
+    h.bullet_bodies.clear();
+    for (uint32_t bi = 0; bi < bodies.size(); ++bi)
+      if (bodies[bi].alive) {
+        h.bullet_particles->add_body(bodies[bi].shape, bodies[bi].pose);
+        h.bullet_bodies.push_back(bi);
+      }
+    h.bullet_version = body_version;
+  }
+  for (size_t k = 0; k < h.bullet_bodies.size(); ++k)
+    h.bullet_particles->set_body_pose(int(k), bodies[h.bullet_bodies[k]].pose);
+  std::vector<std::vector<ParticleContact>> by_collider;
+  h.bullet_particles->collide(h.state.tracked_positions, by_collider);
+  per_body.assign(bodies.size(), {});
+  for (size_t k = 0; k < h.bullet_bodies.size() && k < by_collider.size(); ++k)
+    per_body[h.bullet_bodies[k]] = std::move(by_collider[k]);
 }
 
 }  // namespace handsim

@@ -1,6 +1,7 @@
 #include "grasp.h"
 
 #include "validate.h"
+#include "world_impl.h"
 
 #include <algorithm>
 #include <cmath>
@@ -314,6 +315,227 @@ int rigid_part(const HandModel& model, int p) {
     default:
       return bone;
   }
+}
+
+namespace {
+// A held or released body's velocity never exceeds the cap every caller's velocity is held to (1e4 m/s,
+// rad/s): the direction is kept, the magnitude capped.
+Vec3 capped_speed(const Vec3& v) {
+  const double n = v.norm();
+  return n > validate::kMaxSpeed ? Vec3(v * (validate::kMaxSpeed / n)) : v;
+}
+}  // namespace
+
+// The span a hand must have closed by lately to begin a grasp; 0 (off) is met by any hand.
+double World::Impl::closing_needed() const { return def.grasp.closing_distance; }
+
+// Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
+// Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
+// contacts (hundreds on a pinched lid) need no parts. A held body is kept by the existence of one opposing
+// pair, so the pair that kept it last frame is tried first: while thumb and finger still oppose (nearly
+// every frame of a hold), the answer is known after one dot product instead of a pass over every contact,
+// and it is the same answer (the full test is exact). `directions` and `parts` are scratch space.
+World::Impl::Intent World::Impl::hand_intent(HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
+                                             std::vector<int>& parts) const {
+  const double cos = def.grasp.cos_threshold;
+  const bool across = def.grasp.across_parts && !pair.tracker.grasped();
+  Intent out;
+  out.closing = hands[hi].grip.closed_by() >= closing_needed();
+  if (!across && witness_opposes(pair, cos)) {
+    out.opposing = true;
+    return out;
+  }
+  directions.clear();
+  parts.clear();
+  for (const ParticleContact& c : pair.contacts) {
+    directions.push_back(c.normal);
+    if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
+  }
+  OpposingPair found{0, 0};
+  out.opposing = pair.contacts.size() >= 2 && (across ? opposing_across_parts(directions, parts, cos)
+                                                      : opposing_contacts(directions, cos, &found));
+  pair.witness = {-1, -1};
+  if (out.opposing && !across) pair.witness = {pair.contacts[found.first].particle, pair.contacts[found.second].particle};
+  return out;
+}
+
+// Whether the two particles of the pair's last opposing pair both still touch and still oppose.
+bool World::Impl::witness_opposes(const HandBodyPair& pair, double cos) {
+  if (pair.witness[0] < 0 || pair.witness[0] == pair.witness[1]) return false;
+  auto find = [&](int particle) -> const ParticleContact* {  // contacts are sorted by particle
+    auto it = std::lower_bound(pair.contacts.begin(), pair.contacts.end(), particle,
+                               [](const ParticleContact& c, int p) { return c.particle < p; });
+    return it != pair.contacts.end() && it->particle == particle ? &*it : nullptr;
+  };
+  const ParticleContact* a = find(pair.witness[0]);
+  const ParticleContact* b = a ? find(pair.witness[1]) : nullptr;
+  return b && a->normal.dot(b->normal) < cos;
+}
+
+// Eq. 3 across two hands touching one body: a contact of one opposes a contact of the other.
+bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
+                               std::vector<int>& parts) const {
+  directions.clear();
+  parts.clear();
+  for (const ParticleContact& c : a.contacts) directions.push_back(c.normal), parts.push_back(0);
+  for (const ParticleContact& c : b.contacts) directions.push_back(c.normal), parts.push_back(1);
+  return opposing_across_parts(directions, parts, def.grasp.cos_threshold);
+}
+
+// --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
+std::string World::Impl::decide_grasps(double dt) {
+  std::vector<Vec3>& directions = scratch_directions;
+  std::vector<int>& parts = scratch_parts;
+  std::vector<Intent>& alone = scratch_intents;  // per pair in map order: eq. 3 and closing of its hand by itself
+  alone.clear();
+  for (auto& [key, pair] : pairs) {
+    alone.push_back(bodies[key.second].manipulable() ? hand_intent(pair, key.first, directions, parts) : Intent{});
+    pair.opposing_alone = alone.back().opposing;
+  }
+  int decided = 0;
+  size_t k = 0;
+  for (auto it = pairs.begin(); it != pairs.end(); ++k) {
+    const uint32_t hi = it->first.first, bi = it->first.second;
+    HandBodyPair& pair = it->second;
+    Body& b = bodies[bi];
+    const HandId hand = hand_id(hi);
+    const int count = int(pair.contacts.size());
+    if (count > 0 && pair.previous_count == 0) events.push_back({EventType::ContactBegin, hand, body_id(bi)});
+    if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, body_id(bi)});
+    pair.previous_count = count;
+    if (b.manipulable()) {
+      const HandSlot& h = hands[hi];
+      const Intent own = alone[k];
+      Intent intent = own;
+      // Two hands squeezing one body (two flat palms on a big box): eq. 3 across the hands, closing as the
+      // palms approach each other. Each hand alone has its contacts on one face only. A hand that holds the
+      // body by itself needs no partner, and does not lend one: a finger of the other hand still resting on
+      // a body it handed over is no grip (SecondHandSlipsThenTakesOverWithoutAJump). Only with the closing
+      // rule: without it, two open hands flapping about a cube (Leap recording flapping) grasped it.
+      if (!own.opposing && closing_needed() > 0)
+        for (const auto& [other, other_pair] : pairs)
+          if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
+              hands[other.first].state.tracked && hands_oppose(pair, other_pair, directions, parts)) {
+            intent.opposing = true;
+            intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed();
+            if (intent.closing) break;
+          }
+      const GraspEvent e =
+          pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
+      if (e.type == GraspEventType::GraspEnd)
+        end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
+                  e.zero_velocity);
+      // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
+      if (pair.tracker.grasped() && !b.held_by(hi)) begin_grasp(hi, bi);
+      ++decided;
+    }
+    // Forget pairs with nothing going on, so the map holds only what touches or holds.
+    if (count == 0 && !pair.tracker.grasped()) it = pairs.erase(it);
+    else ++it;
+  }
+  if (decided == 0) return "skip: no hand touches a movable body";
+  return std::to_string(decided) + " hand-body pair(s) decided";
+}
+
+void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
+  Body& b = bodies[bi];
+  const HandSlot& h = hands[hi];
+  if (!b.grasp.grasped) {
+    b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
+    held.push_back(bi);
+    // A free body is attached to the hand. A joint's child is not: the hand only tells the joint where it
+    // wants the child (hard: solve_joints; soft: a velocity drive against the Bullet constraint).
+    if (!b.jointed() && b.soft_joint < 0) set_motion(b, BodyMotion::Kinematic);
+  } else if (b.grasp.primary.index != hi && b.grasp.secondary.is_null()) {
+    b.grasp.secondary = hand_id(hi);
+    b.secondary_relative = h.palm.inverse() * b.pose;
+  } else {
+    return;  // a third hand on the same body: the two holding it keep it
+  }
+  events.push_back({EventType::GraspBegin, hand_id(hi), body_id(bi)});
+}
+
+void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
+  Body& b = bodies[bi];
+  if (!b.held_by(hi)) return;
+  if (b.grasp.primary.index != hi) {
+    b.grasp.secondary = HandId{};
+  } else if (b.jointed() || b.soft_joint >= 0) {
+    // A joint's child is never teleported to the hand: the other hand takes over where the child is, or
+    // the joint keeps the velocity the hand gave it.
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else b.grasp = GraspInfo();
+  } else {
+    // The attach stage has not run yet this frame: first put the body where its hand holds it now, so a
+    // released body starts from the hand's current pose (with the velocity of that point), and a body handed
+    // over starts from there too.
+    const HandSlot& h = hands[hi];
+    b.pose = h.palm * b.grasp.primary_relative;
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else release(b, zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position));
+  }
+  events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
+}
+
+// The secondary hand becomes primary, taking the body from where it is: no jump.
+void World::Impl::hand_over(Body& b) {
+  b.grasp.primary = b.grasp.secondary;
+  b.grasp.secondary = HandId{};
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::release(Body& b, const BodyVelocity& velocity) {
+  b.grasp = GraspInfo();
+  b.just_released = true;
+  released.push_back(uint32_t(&b - bodies.data()));
+  b.linear = capped_speed(velocity.linear);
+  b.angular = capped_speed(velocity.angular);
+  set_motion(b, BodyMotion::Dynamic);
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
+// A held body moved by the caller stays held where it now is.
+void World::Impl::retake_relative_poses(Body& b) {
+  if (!b.grasp.grasped) return;
+  b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+  if (!b.grasp.secondary.is_null()) b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
+}
+
+void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
+  auto it = pairs.find({hi, bi});
+  if (bodies[bi].held_by(hi)) end_grasp(hi, bi, reason, true);
+  if (it != pairs.end() && it->second.previous_count > 0)
+    events.push_back({EventType::ContactEnd, hand_id(hi), body_id(bi)});
+}
+
+// --- lines 10, 14: a grasped object keeps its pose relative to its primary hand ---
+std::string World::Impl::follow_primary_hands() {
+  int following = 0;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.jointed() || b.soft_joint >= 0) continue;
+    const HandSlot& h = hands[b.grasp.primary.index];
+    b.pose = h.palm * b.grasp.primary_relative;
+    const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
+    b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
+    b.angular = capped_speed(v.angular);
+    ++following;
+  }
+  if (following == 0) return "skip: nothing grasped";
+  return std::to_string(following) + " grasped body(ies) follow their hand";
+}
+
+// --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
+std::string World::Impl::retake_secondary_hands() {
+  int slipping = 0;
+  for (uint32_t bi : held_bodies()) {
+    Body& b = bodies[bi];
+    if (b.grasp.secondary.is_null()) continue;
+    b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
+    ++slipping;
+  }
+  if (slipping == 0) return "skip: no second hand holds anything";
+  return std::to_string(slipping) + " second-hand grasp(s) re-taken";
 }
 
 }  // namespace handsim

@@ -1,6 +1,7 @@
 #include "pose_fit.h"
 
 #include "validate.h"
+#include "world_impl.h"
 
 #include <Eigen/SVD>
 
@@ -151,6 +152,91 @@ BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_
   v.angular = rotation_vector(motion.R) / dt;
   v.linear = motion.displacement(centre_of_mass) / dt;
   return v;
+}
+
+// --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
+// The fitted motion is applied as a velocity over this frame rather than as a teleport: in free space both
+// give the same pose, but with a velocity Bullet still resolves the table and other bodies, so a hand
+// pressing a box down cannot push it through the table. The velocity is the touching hands' own velocity at
+// the body plus the fitted correction: the fit only sees what still penetrates after the body's last frame of
+// motion, so the correction alone would stop a body that moves along with the hand (a box thrown while the
+// index still touches it, a box pushed by a moving palm) every frame. With the hand's velocity as the base, a
+// body carried by a moving hand keeps its speed, and one under a still hand gets exactly the correction.
+//
+// A hand that holds one part of a jointed object does not push the other parts: its fingers around the lid
+// also graze the base, and the base pushed by the hand that carries the lid hinged to it would be pushed by
+// itself (the experiments saw such a base thrown metres). The parts stay free for the other hand.
+std::string World::Impl::fit_touched_bodies(double dt) {
+  std::vector<Vec3>& from = scratch_from;
+  std::vector<Vec3>& to = scratch_to;
+  std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
+  held_groups.clear();
+  for (uint32_t bi : held_bodies()) {
+    const Body& b = bodies[bi];  // an unjointed held body is its own group and is not fitted
+    held_groups.push_back({b.grasp.primary.index, group_root(bi)});
+    if (!b.grasp.secondary.is_null()) held_groups.push_back({b.grasp.secondary.index, group_root(bi)});
+  }
+  auto holds_group_of = [&](uint32_t hand, uint32_t body) {
+    const std::pair<uint32_t, uint32_t> key{hand, group_root(body)};
+    return std::find(held_groups.begin(), held_groups.end(), key) != held_groups.end();
+  };
+  int fitted = 0;
+  for (uint32_t k : joint_order) bodies[joints[k].child].supported = false;  // only joints' children are
+  // The touched bodies in slot order (the pairs are ordered by hand first), each with its pairs.
+  auto& touched = scratch_touched;
+  touched.clear();
+  for (const auto& entry : pairs)
+    if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
+  std::stable_sort(touched.begin(), touched.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (size_t t = 0; t < touched.size();) {
+    const uint32_t bi = touched[t].first;
+    size_t end = t;
+    while (end < touched.size() && touched[end].first == bi) ++end;
+    Body& b = bodies[bi];
+    const size_t first = t;
+    t = end;
+    if (!b.manipulable() || b.grasp.grasped || b.just_released) continue;
+    from.clear();
+    to.clear();
+    BodyVelocity carried;
+    for (size_t e = first; e < end; ++e) {
+      const auto& entry = *touched[e].second;
+      if (holds_group_of(entry.first.first, bi)) continue;
+      const size_t before = from.size();
+      for (const ParticleContact& c : entry.second.contacts) {
+        if (c.depth <= 0) continue;
+        from.push_back(c.point);
+        to.push_back(c.point - c.normal * c.depth);  // where the surface must go to stop the penetration
+      }
+      const BodyVelocity v = hands[entry.first.first].history.attached_body_velocity(b.pose.position);
+      carried.linear += double(from.size() - before) * v.linear;
+      carried.angular += double(from.size() - before) * v.angular;
+    }
+    if (from.empty()) continue;
+    const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
+    const Vec3 linear = carried.linear / double(from.size()) + correction.linear;
+    const Vec3 angular = carried.angular / double(from.size()) + correction.angular;
+    if (b.jointed()) {
+      // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
+      b.supported = linear.dot(def.gravity) < 0;
+      // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
+      const double turn = angular.norm() * dt;
+      const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
+      const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
+      project_push(joints[b.hard_joint], simulated, dt);
+      ++fitted;
+      continue;
+    }
+    b.linear = linear;
+    b.angular = angular;
+    backend->write(b.backend, b.pose, b.linear, b.angular);
+    ++fitted;
+  }
+  for (uint32_t bi : released) bodies[bi].just_released = false;
+  released.clear();
+  if (fitted == 0) return "skip: no free body touched";
+  return std::to_string(fitted) + " touched body(ies) fitted";
 }
 
 }  // namespace handsim

@@ -1,5 +1,8 @@
 #include "skinning.h"
 
+#include "deformation.h"
+#include "world_impl.h"
+
 #include <algorithm>
 #include <limits>
 #include <map>
@@ -319,6 +322,179 @@ void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransfo
     lo = lo.cwiseMin(c - Vec3::Constant(reach.reach[k]));
     hi = hi.cwiseMax(c + Vec3::Constant(reach.reach[k]));
   }
+}
+
+namespace {
+// Whether the palm went from `a` to `b` in dt faster than the speed cap (m/s or rad/s).
+bool teleported(const Pose& a, const Pose& b, double dt) {
+  const double angle = a.orientation.angularDistance(b.orientation);
+  return (b.position - a.position).norm() > validate::kMaxSpeed * dt || angle > validate::kMaxSpeed * dt;
+}
+}  // namespace
+
+// --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
+std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
+  int tracked = 0, skinned = 0, in_reach = 0;
+  size_t k = 0;
+  for (HandSlot& h : hands) {
+    if (!h.alive) continue;
+    const HandFrame* frame = k < frames.size() ? &frames[k] : nullptr;
+    ++k;
+    if (!frame || !frame->tracked()) {
+      h.state.tracked = false;
+      h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
+      h.grip.clear();     // nor have closed on what it finds there
+      continue;
+    }
+    // The frame was validated by validate_step: pose the bones, then skin the particles only when the hand's
+    // coarse bounds come near a body (the paper: always).
+    compute_bone_transforms(*h.model, *frame, h.state.bones);
+    h.state.tracked = true;
+    h.state.displaced.clear();
+    h.deformed_current = false;
+    h.particles_current = false;
+    coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
+    if (def.paper_pipeline) {
+      skin_particles(h);
+      ++skinned;
+    } else if (near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+      in_reach += skin_particles_in_reach(h);
+      ++skinned;
+    } else {
+      h.reach_groups.clear();  // far from every body: no contact is possible this frame
+      h.reach_groups_only = true;
+    }
+    const Pose palm{frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
+    // A palm that moved faster than the speed cap since its last frame teleported (a tracker glitch, a
+    // re-centred play space): its motion history says nothing about the new place, and what it holds arrives
+    // there at rest instead of being flung (a 1e6 m jump threw a held cube at 1.8e7 m/s; issue 22).
+    if (h.has_pose && teleported(h.palm, palm, dt)) h.history.clear();
+    h.palm = palm;
+    h.has_pose = true;
+    h.history.push(h.palm, time + dt);  // the frame's end time
+    h.grip.push(grip_span(*h.model, h.state.bones), h.palm.position, time + dt, def.grasp.closing_window_s);
+    h.render_dirty = true;
+    if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
+    ++tracked;
+  }
+  if (tracked == 0) return "skip: no tracked hand";
+  return std::to_string(tracked) + " tracked hand(s), " + std::to_string(skinned) + " near a body (" +
+         std::to_string(in_reach) + " particle(s) within reach of a body skinned), " +
+         std::to_string(tracked - skinned) + " far (particles left unskinned)";
+}
+
+// A hand near a body: only the particle groups whose bone-derived box comes within contact reach of a body
+// (its box grown by the particle radius, and by the release distance for a body the hand holds: the margins
+// detect_contacts uses) are
+// skinned, each with its exact box; the others keep an empty box, so no contact test looks at them, and the
+// particles are skinned in full only if something reads them. Returns the number of particles skinned.
+int World::Impl::skin_particles_in_reach(HandSlot& h) {
+  const HandModel& m = *h.model;
+  const SkinLayout& layout = m.particle_skin;
+  const double reach = m.particle_radius;
+  // The bodies near the hand at all: the only ones its groups need testing against.
+  // Each grown by the margin detect_contacts gives it: the release distance for a body this hand holds, none
+  // for the others (their contacts need real contact).
+  near_boxes.clear();
+  bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+  const uint32_t hand = uint32_t(&h - hands.data());
+  for (uint32_t bi : near_bodies) {
+    const double margin = bodies[bi].held_by(hand) ? def.grasp.release_distance : 0.0;
+    for (int k = 0; k < 6; ++k) near_boxes.push_back(body_boxes[6 * bi + k] + (k < 3 ? -margin : margin));
+  }
+  h.state.tracked_positions.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
+  h.group_bounds.resize(6 * layout.groups.size());
+  auto in_reach = [&](const double* box) {
+    for (size_t j = 0; j < near_boxes.size(); j += 6)
+      if (box[0] - reach <= near_boxes[j + 3] && box[1] - reach <= near_boxes[j + 4] &&
+          box[2] - reach <= near_boxes[j + 5] && near_boxes[j] <= box[3] + reach &&
+          near_boxes[j + 1] <= box[4] + reach && near_boxes[j + 2] <= box[5] + reach)
+        return true;
+    return false;
+  };
+  auto grow = [](Vec3& lo, Vec3& hi, const double* box) {
+    lo = lo.cwiseMin(Eigen::Map<const Vec3>(box));
+    hi = hi.cwiseMax(Eigen::Map<const Vec3>(box + 3));
+  };
+  auto empty = [](double* box) {  // no contact prefilter passes an empty box
+    std::fill(box, box + 3, std::numeric_limits<double>::infinity());
+    std::fill(box + 3, box + 6, -std::numeric_limits<double>::infinity());
+  };
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  int count = 0;
+  bool all = true;
+  const HandReach& r = h.reach;
+  h.reach_groups.clear();
+  for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
+    const size_t first = r.span_first[s], last = r.span_first[s + 1];
+    double span_box[6];
+    coarse_bounds(layout.groups[first], r.span_centre[s], r.span_radius[s], h.state.bones, span_box);
+    if (!in_reach(span_box)) {  // the whole span is out of reach: its box bounds the hand, its groups are empty
+      grow(lo, hi, span_box);
+      for (size_t g = first; g < last; ++g) empty(&h.group_bounds[6 * g]);
+      all = false;
+      continue;
+    }
+    for (size_t g = first; g < last; ++g) {
+      double* box = &h.group_bounds[6 * g];
+      coarse_bounds(layout.groups[g], r.group_centre[g], r.group_radius[g], h.state.bones, box);
+      if (in_reach(box)) {
+        skin_layout(layout, h.state.bones, h.state.tracked_positions.data(), g, g + 1, h.group_bounds.data());
+        h.reach_groups.push_back(uint32_t(g));
+        count += layout.groups[g].end - layout.groups[g].begin;
+        grow(lo, hi, box);  // now the exact box of its centres
+      } else {
+        grow(lo, hi, box);
+        empty(box);
+        all = false;
+      }
+    }
+  }
+  h.state.bounds_lo = lo.array() - m.particle_radius;
+  h.state.bounds_hi = hi.array() + m.particle_radius;
+  h.particles_current = all;
+  h.reach_groups_only = true;
+  return count;
+}
+
+// Eq. 1 for the particles, with the box of each particle group for the contact prefilter; the hand's bounds
+// become the exact box of its particle spheres.
+void World::Impl::skin_particles(HandSlot& h) {
+  const HandModel& m = *h.model;
+  skin_layout(m.particle_skin, h.state.bones, h.state.tracked_positions, &h.group_bounds);
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (size_t g = 0; g < m.particle_skin.groups.size(); ++g) {
+    lo = lo.cwiseMin(Eigen::Map<const Vec3>(&h.group_bounds[6 * g]));
+    hi = hi.cwiseMax(Eigen::Map<const Vec3>(&h.group_bounds[6 * g + 3]));
+  }
+  h.state.bounds_lo = lo.array() - m.particle_radius;
+  h.state.bounds_hi = hi.array() + m.particle_radius;
+  h.particles_current = true;
+  h.reach_groups_only = false;
+}
+
+// Brings the lazily skipped particle positions up to date (same arithmetic as in the step, so same bits).
+void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
+  if (!h.particles_current) skin_particles(h);
+  if (deformed && !h.deformed_current) {
+    h.state.deformed_positions = h.state.tracked_positions;
+    for (size_t k = 0; k < h.state.displaced.size(); ++k)  // the particles deform_hands pushed back
+      h.state.deformed_positions.col(h.state.displaced[k]) = h.displaced_centres[k];
+    h.deformed_current = true;
+  }
+}
+
+// Whether a box (a hand's coarse bounds) comes within the release distance of any body's bounds: the widest
+// margin detect_contacts uses, so a hand that fails this test cannot have a contact.
+bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
+  return box_near_any_body(lo, hi, def.grasp.release_distance);
+}
+
+void World::Impl::skin_render_mesh(HandSlot& h) {
+  if (!h.state.displaced.empty()) refresh_particles(h, true);  // the deformation reads the displaced particles
+  skin_groups(*h.model, h.state.bones, h.render, def.render_threads);
+  apply_render_deformation(*h.model, h.state, h.render);  // reads only displaced particles, which are current
+  h.render_dirty = false;
 }
 
 }  // namespace handsim

@@ -389,4 +389,14 @@ double World::time() const {
   return impl_->time;
 }
 
+void World::Impl::set_motion(Body& b, BodyMotion motion) {
+  if (b.motion == motion) return;
+  backend->set_motion(b.backend, motion, b.mass);
+  b.motion = motion;
+  b.read_asleep = false;
+  ++motion_version;
+  b.synced_pose = b.pose;
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
 }  // namespace handsim

@@ -1,4 +1,5 @@
-// The world's state, shared by world.cpp (the public API) and world_step.cpp (Algorithm 1).
+// The world's state, shared by world.cpp (the public API), world_step.cpp (Algorithm 1) and the files of its
+// stages (skinning, contacts, deformation, grasp, pose_fit, world_joints, world_activity, world_state).
 #pragma once
 
 #include "handsim/world.h"
@@ -190,7 +191,7 @@ struct World::Impl {
   uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
-  // Lazy particles (world_step.cpp): skin now / on read, and the coarse test that decides.
+  // Lazy particles (skinning.cpp): skin now / on read, and the coarse test that decides.
   void skin_particles(HandSlot& h);
   int skin_particles_in_reach(HandSlot& h);
   std::vector<double> near_boxes;  // scratch of skin_particles_in_reach
@@ -199,7 +200,7 @@ struct World::Impl {
   bool near_any_body(const Vec3& lo, const Vec3& hi) const;
   void skin_render_mesh(HandSlot& h);
 
-  // Grasp bookkeeping (world_step.cpp).
+  // Grasp bookkeeping (grasp.cpp); set_motion in world.cpp.
   void begin_grasp(uint32_t hand, uint32_t body);
   void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
   void hand_over(Body& b);
@@ -210,7 +211,10 @@ struct World::Impl {
   void end_pair(uint32_t hand, uint32_t body, EventReason reason);
   void set_motion(Body& b, BodyMotion motion);
 
-  // Stages of Algorithm 1 (world_step.cpp); each returns why it ran or had nothing to do.
+  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it:
+  // pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps,
+  // follow_primary_hands and retake_secondary_hands grasp.cpp, fit_touched_bodies pose_fit.cpp, simulate
+  // world_step.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
   std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
   std::string detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
