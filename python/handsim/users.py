@@ -70,13 +70,17 @@ class HandShape:
     thumb_opposition: float = 0.0
     spread: float = 0.0
 
-    def blend(self, other: "HandShape", s: float) -> "HandShape":
-        return HandShape(tuple((1 - s) * a + s * b for a, b in zip(self.curl, other.curl)),
-                     (1 - s) * self.thumb_opposition + s * other.thumb_opposition,
-                     (1 - s) * self.spread + s * other.spread)
+    def params(self):
+        return _h.HandPoseParams(curl=list(self.curl), thumb_opposition=self.thumb_opposition, spread=self.spread)
+
+    def opened(self, openness: float) -> "HandShape":
+        """This grip opened by `openness` (0 the grip .. 1 the open hand) the way every synthetic hand of handsim
+        opens and closes its grips (handsim.open_grip): people reach with the hand open and close it onto what
+        they grasp, and the intent rule (GraspSettings.closing_distance) grasps only a closing hand."""
+        p = _h.open_grip(self.params(), float(min(max(openness, 0.0), 1.0)))
+        return HandShape(tuple(float(c) for c in p.curl), float(p.thumb_opposition), float(p.spread))
 
 
-OPEN_HAND = HandShape(spread=0.3)
 FLAT_HAND = HandShape()
 # The scene's lid_pinch_shape(): fingers straight on the lid, thumb half opposed under the lip.
 THUMB_UNDER = HandShape(thumb_opposition=0.5)
@@ -214,7 +218,7 @@ class SimulatedUser:
     ``world.hands()`` = [right, left] (two-hand trials) or [right] (the left hand is then untracked).
 
     The right hand goes through: ``reach`` (to a hover pose above the lip, then down in front of it, the hand
-    pre-shaped), ``close_in`` (onto the lip, the grasp shape closing), ``grip``, ``swing`` (about the hinge, to
+    open), ``close_in`` (onto the lip, closing the grasp shape from the open hand), ``grip``, ``swing`` (about the hinge, to
     the goal angle), ``hold``, ``let_go`` (fingers open, hand backs off), ``withdraw`` and ``watch``. When
     the lid stops following the hand for longer than the user's reaction time, or is not where it should
     be after letting go, the user starts again from ``reach`` at the lid's current angle (three retries).
@@ -240,6 +244,8 @@ class SimulatedUser:
         self._start_angle = 0.0
         self._left_hold = None
         self._thumb_fix = self._thumb_compensation()
+        self._openness = 1.0  # how open the right hand's grip is (HandShape.opened): it starts open
+        self._reach_openness = 1.0  # and at the start of the current reach
 
     # --- geometry of the box as the user sees it ---
     def _angle(self):
@@ -321,7 +327,7 @@ class SimulatedUser:
         self.intent_hold = False
 
         # The left hand (two-hand trials): reach to the base's left end, close the grip, keep holding.
-        left_pose, left_shape = None, OPEN_HAND
+        left_pose, left_shape = None, FLAT_HAND
         if self.left is not None:
             if self._left_hold is None:
                 self._left_hold = self._left_hold_pose()
@@ -330,41 +336,43 @@ class SimulatedUser:
                     left_pose = None  # the glove picks the left hand up only once it is at the base
                 else:
                     left_pose = self._left_hold
-                    left_shape = FLAT_HAND.blend(BASE_HOLD, min_jerk((self.phase_t - d["left_reach"]) / d["left_grip"]))
+                    left_shape = BASE_HOLD.opened(1 - min_jerk((self.phase_t - d["left_reach"]) / d["left_grip"]))
                     if self.phase_t >= d["left_reach"] + d["left_grip"]:
                         self._set("reach")
             else:
                 left_pose, left_shape = self._left_hold, BASE_HOLD
 
-        shape = OPEN_HAND
         grasping = self.grasp_shape
+        openness = 1.0
         if self.phase == "left_reach":
             palm = self._rest_pose()
         elif self.phase == "reach":
+            # The hand travels open (a retry first opens the hand it held the lid with) and closes only on the lip.
             if self._waypoints is None:
                 self._start_angle = angle
+                self._reach_openness = self._openness
                 start = self.right_pose if self.right_pose is not None else self._rest_pose()
                 pre = self._grip_pose(angle, 0.004, 0.045)
                 self._waypoints = (start, self._up(pre, 0.06), pre)
             start, hover, pre = self._waypoints
+            opening = min_jerk(3 * self.phase_t / d["reach"])
+            openness = self._reach_openness + (1 - self._reach_openness) * opening
             if self.phase_t < d["reach"]:
                 palm = lerp_pose(start, hover, min_jerk(self.phase_t / d["reach"]))
-                shape = OPEN_HAND.blend(grasping, 0.7 * min_jerk(self.phase_t / d["reach"]))
             else:
                 s = min_jerk((self.phase_t - d["reach"]) / d["descend"])
                 palm = lerp_pose(hover, pre, s)
-                shape = OPEN_HAND.blend(grasping, 0.7)
                 if self.phase_t >= d["reach"] + d["descend"]:
                     self._set("close_in")
         elif self.phase == "close_in":
             s = min_jerk(self.phase_t / d["close_in"])
             palm = lerp_pose(self._waypoints[2], self._grip_pose(self._start_angle), s)
-            shape = OPEN_HAND.blend(grasping, 0.7 + 0.3 * s)
+            openness = 1 - s
             if self.phase_t >= d["close_in"]:
                 self._set("grip")
         elif self.phase == "grip":
             palm = self._grip_pose(self._start_angle)
-            shape = grasping
+            openness = 0.0
             self.intent_hold = p.style != "push" and self.phase_t >= 0.1
             if self.phase_t >= d["grip"]:
                 self._set("swing")
@@ -372,7 +380,7 @@ class SimulatedUser:
             goal = self._goal()
             cmd = self._start_angle + (goal - self._start_angle) * min_jerk(self.phase_t / d["swing"])
             palm = self._grip_pose(cmd)
-            shape = grasping
+            openness = 0.0
             self.intent_hold = p.style != "push"
             # Does the lid follow the hand? (Past a limit it cannot; that is not the lid getting away.)
             target = min(max(cmd, 0.0), 0.5 * math.pi)
@@ -387,7 +395,7 @@ class SimulatedUser:
                 self._set("hold")
         elif self.phase == "hold":
             palm = self._grip_pose(self._goal())
-            shape = grasping
+            openness = 0.0
             self.intent_hold = p.style != "push"
             if self.phase_t >= d["hold"]:
                 self._set("let_go")
@@ -396,7 +404,7 @@ class SimulatedUser:
             s = min_jerk(2 * self.phase_t / d["let_go"])
             m = min_jerk(2 * self.phase_t / d["let_go"] - 1)
             palm = self._grip_pose(self._goal(), 0.02 * m, 0.03 * m)
-            shape = grasping.blend(OPEN_HAND if p.task == "close" else FLAT_HAND, s)
+            openness = s
             if self.phase_t >= d["let_go"]:
                 self._waypoints = (palm,)
                 self._set("withdraw")
@@ -417,9 +425,8 @@ class SimulatedUser:
                 self._retry()
             elif ok and self.phase_t >= 0.5:
                 self.done = True
-        if self.phase == "reach" and self.phase_t == 0.0 and self._waypoints is None:
-            pass
-        return self._emit(palm, shape, left_pose, left_shape)
+        self._openness = openness
+        return self._emit(palm, grasping.opened(openness), left_pose, left_shape)
 
     def _retry(self):
         self.attempts += 1
