@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import handsim
+from conftest import with_grasp_rule
 from handsim import experiments as X
 from handsim import users as U
 
@@ -65,6 +66,19 @@ def test_a_clean_two_hand_open_trial_succeeds(method):
     assert r.grasp_begins >= 1 and not r.drop and not r.knocked
     assert r.max_violation_m < 1e-9 and r.max_overshoot_rad < 1e-9
     assert 0.5 < r.time_s < 6
+
+
+@pytest.mark.parametrize("task, hands, style", [("open", 1, "pinch"), ("open", 2, "thumb_under"),
+                                               ("close", 1, "carry"), ("close", 2, "carry")])
+def test_clean_users_close_their_hands_and_succeed_with_either_grasp_rule(task, hands, style, grasp_rule,
+                                                                          monkeypatch):
+    """The users travel open and close onto the lip (and the left hand onto the base), so the intent rule's
+    closing (a grasp begins only while the hand closes) grasps the lid as eq. 3 alone does."""
+    world_def = X.world_def
+    monkeypatch.setattr(X, "world_def", lambda *a, **k: with_grasp_rule(grasp_rule, world_def(*a, **k)))
+    r = X.Bench("exact", -0.7).run(clean(task, hands, style))
+    assert r.success and r.grasp_begins >= 1 and not r.drop and not r.knocked, r
+    assert hands == 1 or r.base_held
 
 
 def test_a_clean_close_trial_succeeds_under_every_method_and_soft_stretches(tmp_path):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import handsim
+from conftest import with_grasp_rule
 from handsim._core import solvers
 from handsim.bench import joints as bench
 
@@ -319,17 +320,18 @@ def test_lid_dragged_past_its_limit_stays_within_limits_and_on_the_hinge():
 # The two faults the experiments found (python -m handsim.experiments.core_issues), as regressions. Before the
 # fixes the base was thrown 5.85 m and the lid slammed shut at 652 deg/s (docs/grasp.md, "Contacts keep ...").
 
-def test_a_hand_holding_the_lid_does_not_push_the_base_it_grazes():
+def test_a_hand_holding_the_lid_does_not_push_the_base_it_grazes(grasp_rule):
     from handsim.experiments import core_issues
-    moved, touching, grasped = core_issues.base_thrown_by_a_touch(depth_m=0.004)
+    moved, touching, grasped = core_issues.base_thrown_by_a_touch(depth_m=0.004,
+                                                                  world_def=with_grasp_rule(grasp_rule))
     assert grasped and touching >= 5  # the thumb really grazed the base while the lid was held
     assert moved < 0.015  # only the push of the first contact frame, before the grasp (about 7 mm)
 
 
 @pytest.mark.parametrize("swing_deg", [105.0, 112.0])
-def test_a_lid_held_past_its_limit_stays_open(swing_deg):
+def test_a_lid_held_past_its_limit_stays_open(swing_deg, grasp_rule):
     from handsim.experiments import core_issues
-    closing_rate, final = core_issues.lid_bounces_off_upper_limit(swing_deg)
+    closing_rate, final = core_issues.lid_bounces_off_upper_limit(swing_deg, world_def=with_grasp_rule(grasp_rule))
     assert closing_rate < 60.0  # deg/s; the far-face push gave 650-700
     assert final > 85.0
 

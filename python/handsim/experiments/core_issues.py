@@ -19,12 +19,12 @@ R = _h.Handedness.RIGHT
 
 
 def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015,
-                           hand_def=None):
+                           hand_def=None, world_def=None):
     """A right hand arrives open at the closed lid and closes its pinch there (lid_pinch_palm, closing_grip of
     lid_pinch_shape) with its palm `depth_m` closer to the hinge than the scene's pose, so the thumb grazes the
     base's front face, and swings the lid open over one second. Returns (base displacement m, max particles touching the base, lid grasped). `hand_def`:
-    a right-hand HandDef (default: HandDef())."""
-    w = _h.World()
+    a right-hand HandDef (default: HandDef()); `world_def` (default: WorldDef()), e.g. to choose the grasp rule."""
+    w = _h.World(world_def if world_def is not None else _h.WorldDef())
     d = _h.JewelryBoxDef()
     d.lid_overhang = lid_overhang
     box = _h.build_jewelry_box(w, d)
@@ -44,11 +44,12 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
     return moved, touching, grasped
 
 
-def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015, hand_def=None):
+def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 0.015, hand_def=None,
+                                world_def=None):
     """The hand closes its pinch on the lid (closing_grip), swings it (min-jerk, 1.2 s) to `swing_deg`, past
     the 90 deg limit, and holds still there. Returns (largest closing rate after the lid first reached 90 deg, deg/s; final angle deg).
-    `hand_def`: a right-hand HandDef (default: HandDef())."""
-    w = _h.World()
+    `hand_def`: a right-hand HandDef (default: HandDef()); `world_def` as in base_thrown_by_a_touch."""
+    w = _h.World(world_def if world_def is not None else _h.WorldDef())
     d = _h.JewelryBoxDef()
     d.lid_overhang = lid_overhang
     box = _h.build_jewelry_box(w, d)
