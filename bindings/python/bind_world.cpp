@@ -30,7 +30,7 @@ void bind_id(py::module_& m, const char* name, const char* doc) {
       .def_readonly("index", &IdT::index)
       .def_readonly("generation", &IdT::generation)
       .def_property_readonly("packed", &IdT::packed)
-      .def_static("unpack", &IdT::unpack)
+      .def_static("unpack", &IdT::unpack, py::arg("packed"))
       .def("__eq__", [](IdT a, py::object b) { return py::isinstance<IdT>(b) && a == b.cast<IdT>(); })
       .def("__hash__", [](IdT a) { return std::hash<uint64_t>()(a.packed()); })
       .def("__repr__", [name](IdT a) { return id_repr(name, a.index, a.generation); });

@@ -85,8 +85,8 @@ void flag_property(py::class_<T>& cls, const char* name, bool T::*field, const s
 }
 
 // Builds a default T and assigns each keyword as an attribute, so `BodyDef(mass=2)` works for every def
-// struct; an unknown keyword, or a value of the wrong type, is a TypeError naming the keyword (pybind11's
-// generic message names only the setter's signature).
+// struct; an unknown keyword is a TypeError naming it. A value of the wrong type goes through the field's
+// setter, whose message names Class.field (handsim/argument_errors.py replaces pybind11's generic one).
 template <class T>
 T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
   py::object obj = py::cast(T());
@@ -94,17 +94,7 @@ T from_kwargs(const py::kwargs& kwargs, const char* type_name) {
     std::string key = py::str(item.first);
     if (!py::hasattr(obj, key.c_str()))
       throw py::type_error(std::string(type_name) + "() got an unexpected keyword argument '" + key + "'");
-    try {
-      py::setattr(obj, key.c_str(), item.second);
-    } catch (const py::error_already_set& e) {
-      // Setters of our own already name the field; only pybind11's generic mismatch is rewritten.
-      if (!e.matches(PyExc_TypeError) || std::string(e.what()).find("incompatible function arguments") ==
-                                             std::string::npos)
-        throw;
-      throw py::type_error(std::string(type_name) + "." + key + ": cannot take " +
-                           std::string(py::repr(item.second)) + " (a " +
-                           std::string(py::str(py::type::of(item.second).attr("__name__"))) + ")");
-    }
+    py::setattr(obj, key.c_str(), item.second);
   }
   return obj.cast<T>();
 }

@@ -6,6 +6,11 @@ x, y, z, w; poses as (7,) arrays ``[x, y, z, qx, qy, qz, qw]``; hand joints in O
 """
 import enum as _enum
 
+from . import _core
+from .argument_errors import name_bad_arguments as _name_bad_arguments
+
+_name_bad_arguments(_core)  # before the re-export below, so handsim.X is the wrapped X
+
 from ._core import *  # noqa: F401,F403
 from ._core import __version__, Error, JOINT_NAMES  # noqa: F401
 
