@@ -86,15 +86,22 @@ const Joint& World::Impl::joint(JointId id, const char* argument) const {
   return const_cast<Impl*>(this)->joint(id, argument);
 }
 
-// The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
+namespace {
+// One step up a joint group: the parent of `body` along its hard joint, else its soft one; kWorldParent at
+// the top. group_root walks it and add_joint refuses a joint that would make it a loop, so the walk ends.
+uint32_t group_parent(const std::vector<Body>& bodies, const std::vector<Joint>& joints, uint32_t body) {
+  const int j = bodies[body].hard_joint >= 0 ? bodies[body].hard_joint : bodies[body].soft_joint;
+  return j < 0 ? kWorldParent : joints[j].parent;
+}
+}  // namespace
+
 uint32_t World::Impl::group_root(uint32_t body) const {
-  for (;;) {
-    const int j = bodies[body].hard_joint >= 0 ? bodies[body].hard_joint : bodies[body].soft_joint;
-    if (j < 0 || joints[j].parent == kWorldParent) return body;
-    body = joints[j].parent;
-  }
+  for (uint32_t up = group_parent(bodies, joints, body); up != kWorldParent; up = group_parent(bodies, joints, body))
+    body = up;
+  return body;
 }
 
+// The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
 JointSolver World::Impl::solver_of(const Joint& j) const {
 #if HANDSIM_WITH_CERES
   if (def.paper_pipeline) return JointSolver::LmCeres;
@@ -172,14 +179,14 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
   if (j.model == JointModel::Hard) {
     if (c.hard_joint >= 0)
       validate::fail(arg + ".child", "is already the child of a hard joint", Status::InvalidState);
-    // Walking up from the parent must not reach the child, or the group would be a loop.
-    for (uint32_t p = j.parent; p != kWorldParent;) {
-      if (p == j.child) validate::fail(arg + ".parent", "is a descendant of the child: a loop", Status::InvalidState);
-      p = bodies[p].hard_joint < 0 ? kWorldParent : joints[bodies[p].hard_joint].parent;
-    }
   } else if (c.soft_joint >= 0 || c.hard_joint >= 0) {
     validate::fail(arg + ".child", "is already the child of a joint", Status::InvalidState);
   }
+  // Walking up from the parent, through hard and soft joints alike (as group_root does), must not reach the
+  // child, or the group would be a loop. Soft joints were not walked: two soft joints each the other's parent,
+  // or a hard one closing a ring through a soft one, hung group_root (found by the fuzz driver, issue 22).
+  for (uint32_t p = j.parent; p != kWorldParent; p = group_parent(bodies, joints, p))
+    if (p == j.child) validate::fail(arg + ".parent", "is the child or a descendant of it: a loop", Status::InvalidState);
   j.vertices = make_joint_vertices(model_vertices(c.shape), Eigen::VectorXd(), joint_point_on_child(j));
   Vec3 lo, hi;
   shape_local_bounds(c.shape, lo, hi);
@@ -267,6 +274,15 @@ void World::Impl::place_children() {
 
 // --- free dynamics of hard joints (one substep) ---
 
+namespace {
+// [v]x: cross_matrix(v) * u == v.cross(u).
+Mat3 cross_matrix(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+}  // namespace
+
 void World::Impl::integrate_joints(double h) {
   for (uint32_t k : joint_order) {
     Joint& j = joints[k];
@@ -294,9 +310,15 @@ void World::Impl::integrate_joints(double h) {
       // Three rotational DOFs about the pivot: Euler's equations with the inertia about the pivot.
       const Vec3 r = now.position - p.transform(j.ball.pivot_parent);
       const Mat3 inertia = world_inertia(c, now.orientation) + m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
-      // Damping implicit (I + h c) w' = I w + h tau, for the same reason as implicit_damped.
-      const Vec3 torque = r.cross(m * g) - j.spin.cross(inertia * j.spin);
-      j.spin = (inertia + h * j.damping * Mat3::Identity()).ldlt().solve(inertia * j.spin + h * torque);
+      // Implicit in the damping (for the same reason as implicit_damped) and in the gyroscopic term, by one
+      // Newton step on I (w' - w) + h (w' x I w' + c w' - tau_gravity) = 0 (the linearisation Bullet's
+      // implicit gyroscopic solver uses). The explicit gyroscopic term gained energy every substep: the fuzz
+      // driver (issue 22 item 2) spun a ball child from 35 to 1e19 rad/s in 300 frames.
+      const Vec3 momentum = inertia * j.spin;
+      const Mat3 jacobian = inertia + h * (cross_matrix(j.spin) * inertia - cross_matrix(momentum)) +
+                            h * j.damping * Mat3::Identity();
+      const Vec3 residual = h * (j.spin.cross(momentum) + j.damping * j.spin - r.cross(m * g));
+      j.spin -= jacobian.partialPivLu().solve(residual);
       const Quat turn(Eigen::AngleAxisd(h * j.spin.norm(), j.spin.normalized()));
       const Quat world_rel = j.spin.norm() > 0 ? turn : Quat::Identity();
       Quat next = (p.orientation.conjugate() * world_rel * p.orientation * j.rotation).normalized();
