@@ -109,7 +109,7 @@ void bind_joint_id(py::module_& m) {
       .def_readonly("index", &JointId::index)
       .def_readonly("generation", &JointId::generation)
       .def_property_readonly("packed", &JointId::packed)
-      .def_static("unpack", &JointId::unpack, py::arg("packed"))
+      .def_static("unpack", &JointId::unpack, py::arg("packed"), "The id whose `packed` value this is.")
       .def("__eq__", [](JointId a, py::object b) { return py::isinstance<JointId>(b) && a == b.cast<JointId>(); })
       .def("__hash__", [](JointId a) { return std::hash<uint64_t>()(a.packed()); })
       .def("__repr__", [](JointId a) {

@@ -30,7 +30,7 @@ void bind_id(py::module_& m, const char* name, const char* doc) {
       .def_readonly("index", &IdT::index)
       .def_readonly("generation", &IdT::generation)
       .def_property_readonly("packed", &IdT::packed)
-      .def_static("unpack", &IdT::unpack, py::arg("packed"))
+      .def_static("unpack", &IdT::unpack, py::arg("packed"), "The id whose `packed` value this is.")
       .def("__eq__", [](IdT a, py::object b) { return py::isinstance<IdT>(b) && a == b.cast<IdT>(); })
       .def("__hash__", [](IdT a) { return std::hash<uint64_t>()(a.packed()); })
       .def("__repr__", [name](IdT a) { return id_repr(name, a.index, a.generation); });
@@ -61,16 +61,18 @@ void bind_shapes(py::module_& m) {
           [](ShapeDef& s, py::handle v) { s.points = to_points(v, "shape.points"); })
       .def_readwrite("indices", &ShapeDef::indices)
       .def_static("box", [](py::handle he) { return ShapeDef::box(to_vec3(he, "half_extents")); },
-                  py::arg("half_extents"))
-      .def_static("sphere", &ShapeDef::sphere, py::arg("radius"))
-      .def_static("capsule", &ShapeDef::capsule, py::arg("radius"), py::arg("half_height"))
+                  py::arg("half_extents"), "A box of these (3,) half extents (m), centred on the body's origin.")
+      .def_static("sphere", &ShapeDef::sphere, py::arg("radius"), "A sphere of this radius (m).")
+      .def_static("capsule", &ShapeDef::capsule, py::arg("radius"), py::arg("half_height"),
+                  "A capsule along local Y: a core segment of 2 half_height (m) swept by radius (m).")
       .def_static("convex_hull", [](py::handle pts) { return ShapeDef::convex_hull(to_points(pts, "points")); },
-                  py::arg("points"))
+                  py::arg("points"), "The convex hull of (N, 3) points (m, body frame).")
       .def_static("triangle_mesh",
                   [](py::handle pts, std::vector<int> idx) {
                     return ShapeDef::triangle_mesh(to_points(pts, "vertices"), std::move(idx));
                   },
-                  py::arg("vertices"), py::arg("indices"))
+                  py::arg("vertices"), py::arg("indices"),
+                  "A triangle mesh: (N, 3) vertices (m, body frame), three vertex indices per triangle.")
       .def("__repr__", [](const ShapeDef& s) {
         return "Shape(" + std::string(py::str(py::cast(s.type))) + ")";
       });
