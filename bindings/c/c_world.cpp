@@ -105,13 +105,31 @@ HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const
   });
 }
 
+static_assert(HANDSIM_STAGE_COUNT == kStageCount, "handsim_step_report.stages has one slot per Stage");
+
+HANDSIM_API int HANDSIM_CALL handsim_last_step(const handsim_world* world, handsim_step_report* out_report) {
+  return guarded([&] {
+    handsim_step_report& out = deref(out_report, "out_report");
+    const StepReport r = checked(world).world.last_step();
+    for (size_t k = 0; k < kStageCount; ++k) {
+      const StageReport& s = r.stages[k];
+      out.stages[k] = {s.seconds, int32_t(s.stage), int32_t(s.skip), s.work, s.particles};
+    }
+    out.dropped_seconds = r.dropped_seconds;
+    out.warnings = r.warnings;
+    out.substeps = r.substeps;
+    out.bullet = r.bullet;
+    out.nonfinite_bodies = r.nonfinite_bodies;
+  });
+}
+
 HANDSIM_API int HANDSIM_CALL handsim_stage_reports(const handsim_world* world, handsim_stage_report* out_reports,
                                                    int32_t capacity, int32_t* count) {
   return guarded([&] {
-    const std::vector<StageReport>& reports = checked(world).world.stage_reports();
-    if (!output_buffer(out_reports, capacity, count, reports.size(), "out_reports")) return;
-    for (size_t i = 0; i < reports.size(); ++i)
-      out_reports[i] = {reports[i].seconds, reports[i].ran, 0, reports[i].name};
+    const StepReport r = checked(world).world.last_step();
+    if (!output_buffer(out_reports, capacity, count, r.stages.size(), "out_reports")) return;
+    for (size_t i = 0; i < r.stages.size(); ++i)
+      out_reports[i] = {r.stages[i].seconds, r.stages[i].ran(), 0, r.stages[i].name()};
   });
 }
 

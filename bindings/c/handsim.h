@@ -33,9 +33,12 @@
  * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule).
  * 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand;
  * handsim_world_settings gained paper_pipeline and render_threads (it now mirrors every WorldDef field);
- * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value). */
+ * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value).
+ * 2.1: save and restore (handsim_save_state, handsim_restore_state).
+ * 2.2: the typed step report (handsim_step_report, handsim_last_step, HANDSIM_STAGE_*, HANDSIM_SKIP_*,
+ * HANDSIM_WARNING_*). */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 1
+#define HANDSIM_ABI_VERSION_MINOR 2
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -87,6 +90,20 @@ enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_E
        HANDSIM_EVENT_GRASP_END = 3 };
 enum { HANDSIM_REASON_NONE = 0, HANDSIM_REASON_RELEASED = 1, HANDSIM_REASON_TRACKING_LOST = 2,
        HANDSIM_REASON_BODY_REMOVED = 3, HANDSIM_REASON_HAND_REMOVED = 4 };
+/* The stages of a step in the order they run; what each one's `work` counts: enum_table.h, Stage. */
+enum { HANDSIM_STAGE_SKINNING = 0, HANDSIM_STAGE_CONTACTS = 1, HANDSIM_STAGE_DEFORMATION = 2, HANDSIM_STAGE_GRASP = 3,
+       HANDSIM_STAGE_ATTACH = 4, HANDSIM_STAGE_POSE_FIT = 5, HANDSIM_STAGE_DYNAMICS = 6, HANDSIM_STAGE_JOINTS = 7,
+       HANDSIM_STAGE_SLIP = 8 };
+enum { HANDSIM_STAGE_COUNT = 9 };
+/* Why a stage had nothing to do (NONE: it ran). */
+enum { HANDSIM_SKIP_NONE = 0, HANDSIM_SKIP_NO_TRACKED_HAND = 1, HANDSIM_SKIP_NO_HAND_NEAR_BODY = 2,
+       HANDSIM_SKIP_NO_PARTICLE_INSIDE = 3, HANDSIM_SKIP_NO_MOVABLE_BODY_TOUCHED = 4, HANDSIM_SKIP_NOTHING_GRASPED = 5,
+       HANDSIM_SKIP_NO_FREE_BODY_TOUCHED = 6, HANDSIM_SKIP_BELOW_SUBSTEP = 7, HANDSIM_SKIP_NO_JOINTS = 8,
+       HANDSIM_SKIP_NO_SECOND_HAND = 9 };
+/* What a step dropped or recovered from: handsim_step_report.warnings has bit (1u << HANDSIM_WARNING_*) set for
+ * each one raised. */
+enum { HANDSIM_WARNING_SUBSTEPS_DROPPED = 0, HANDSIM_WARNING_NON_FINITE_RECOVERED = 1,
+       HANDSIM_WARNING_HAND_TELEPORTED = 2 };
 
 /* ---------------------------------------------------------------------------------------------------------
  * Types */
@@ -324,6 +341,25 @@ typedef struct handsim_stage_report {
   const char* name;              /* owned by the world; valid until its next step, reset or destroy */
 } handsim_stage_report;
 
+/* One stage of a step (handsim::StageReport). */
+typedef struct handsim_step_stage {
+  double seconds;
+  int32_t stage;                 /* HANDSIM_STAGE_* (its index in handsim_step_report.stages) */
+  int32_t skip;                  /* HANDSIM_SKIP_*; HANDSIM_SKIP_NONE: the stage ran */
+  int32_t work;                  /* what it did, in its unit (enum_table.h, Stage) */
+  int32_t particles;             /* skinning: skinned; contacts: tested; deformation: pushed back; else 0 */
+} handsim_step_stage;
+
+/* What a step did (handsim::StepReport). */
+typedef struct handsim_step_report {
+  handsim_step_stage stages[HANDSIM_STAGE_COUNT];
+  double dropped_seconds;        /* time beyond max_substeps dropped (bit HANDSIM_WARNING_SUBSTEPS_DROPPED) */
+  uint32_t warnings;             /* bit (1u << HANDSIM_WARNING_*) per warning raised */
+  int32_t substeps;              /* fixed substeps run */
+  int32_t bullet;                /* bool: Bullet simulated them (0: no dynamic body awake) */
+  int32_t nonfinite_bodies;      /* non-finite body states replaced (bit HANDSIM_WARNING_NON_FINITE_RECOVERED) */
+} handsim_step_report;
+
 /* The paper's jewelry box scene (handsim::JewelryBoxDef): base, lid, hinge on the back edge, 0..90 degrees. */
 typedef struct handsim_jewelry_box_def {
   handsim_vec3 position;         /* centre of the base's bottom face */
@@ -431,7 +467,9 @@ HANDSIM_API int HANDSIM_CALL handsim_restore_state(handsim_world* world, const u
  * the rest untracked this frame (hands may be NULL when hand_count is 0). Everything is validated first. */
 HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const handsim_hand_frame* hands,
                                           int32_t hand_count);
-/* Per-stage timings of the last step (buffer rules above). */
+/* What the last step did (all zero before the first step). Since ABI 2.2. */
+HANDSIM_API int HANDSIM_CALL handsim_last_step(const handsim_world* world, handsim_step_report* out_report);
+/* Per-stage timings of the last step (buffer rules above); handsim_last_step says more. */
 HANDSIM_API int HANDSIM_CALL handsim_stage_reports(const handsim_world* world, handsim_stage_report* out_reports,
                                                    int32_t capacity, int32_t* count);
 /* The same as readable text with why each stage ran; *length receives the bytes needed including the NUL. */

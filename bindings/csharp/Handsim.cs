@@ -33,6 +33,11 @@ namespace Handsim
     public enum ParticleContacts { ClosedForm = 0, BulletObjects = 1 }
     public enum EventType { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 }
     public enum EventReason { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 }
+    public enum Stage { Skinning = 0, Contacts = 1, Deformation = 2, Grasp = 3, Attach = 4, PoseFit = 5, Dynamics = 6,
+                        Joints = 7, Slip = 8 }
+    public enum SkipReason { None = 0, NoTrackedHand = 1, NoHandNearBody = 2, NoParticleInside = 3, NoMovableBodyTouched = 4,
+                             NothingGrasped = 5, NoFreeBodyTouched = 6, BelowSubstep = 7, NoJoints = 8, NoSecondHand = 9 }
+    public enum StepWarning { SubstepsDropped = 0, NonFiniteRecovered = 1, HandTeleported = 2 }  // bit indices of StepReport.Warnings
 
     /// <summary>A failed native call: the status and the library's message (which names the argument).</summary>
     public sealed class HandsimException : Exception
@@ -472,13 +477,31 @@ namespace Handsim
         public IntPtr Name;
     }
 
-    /// <summary>A stage of the last step with its name copied into managed memory.</summary>
-    public struct StageTiming
+    /// <summary>One stage of a step (handsim_step_stage): its cost, its work, or why it had none.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct StepStage
     {
-        public string Name;
         public double Seconds;
-        public bool Ran;
-        public override string ToString() { return Name + (Ran ? " ran " : " skip ") + (Seconds * 1e6).ToString("F1") + " us"; }
+        public Stage Stage;
+        public SkipReason Skip;      // None: the stage ran
+        public int Work;             // what it did, in its unit (enum_table.h, Stage)
+        public int Particles;        // skinning: skinned; contacts: tested; deformation: pushed back; else 0
+        public bool Ran { get { return Skip == SkipReason.None; } }
+        public override string ToString() { return Stage + (Ran ? " ran " : " skip (" + Skip + ") ") + (Seconds * 1e6).ToString("F1") + " us"; }
+    }
+
+    /// <summary>What the last step did (handsim_step_report).</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct StepReport
+    {
+        [MarshalAs(UnmanagedType.ByValArray, SizeConst = 9)] public StepStage[] Stages;  // HANDSIM_STAGE_COUNT, by Stage
+        public double DroppedSeconds;  // time beyond max_substeps dropped (StepWarning.SubstepsDropped)
+        public uint Warnings;          // bit (1 << StepWarning) per warning raised; Has(w) reads one
+        public int Substeps;
+        public Bool32 Bullet;          // Bullet simulated the substeps (false: no dynamic body awake)
+        public int NonfiniteBodies;    // non-finite body states replaced (StepWarning.NonFiniteRecovered)
+        public StepStage Get(Stage s) { return Stages[(int)s]; }
+        public bool Has(StepWarning w) { return (Warnings & (1u << (int)w)) != 0; }
     }
 
     [StructLayout(LayoutKind.Sequential)]
@@ -610,6 +633,7 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_save_state(WorldHandle world, [Out] byte[] bytes, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_restore_state(WorldHandle world, [In] byte[] bytes, int size);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_step(WorldHandle world, double dt, [In] HandFrame[] hands, int handCount);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_last_step(WorldHandle world, out StepReport report);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_reports(WorldHandle world, [Out] StageReport[] reports, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_summary(WorldHandle world, [Out] byte[] text, int capacity, out int length);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_events(WorldHandle world, [Out] Event[] events, int capacity, out int count);
@@ -796,14 +820,12 @@ namespace Handsim
             }
         }
 
-        public StageTiming[] StageReports()
+        /// <summary>What the last step did: per stage its cost and work or skip reason, and the warnings.</summary>
+        public StepReport LastStep()
         {
-            StageReport[] raw = Native.Read<StageReport>((StageReport[] b, int c, out int n) => Native.handsim_stage_reports(handle, b, c, out n),
-                                                         "handsim_stage_reports");
-            var result = new StageTiming[raw.Length];
-            for (int i = 0; i < raw.Length; ++i)
-                result[i] = new StageTiming { Name = Marshal.PtrToStringAnsi(raw[i].Name), Seconds = raw[i].Seconds, Ran = raw[i].Ran };
-            return result;
+            StepReport r;
+            Native.Check(Native.handsim_last_step(handle, out r), "handsim_last_step");
+            return r;
         }
 
         public string StageSummary()

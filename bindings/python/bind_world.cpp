@@ -191,11 +191,12 @@ void bind_world_class(py::module_& m) {
            [](World& w, double dt, py::handle hands) {
              std::vector<HandFrame> frames = to_frames(hands);
              py::gil_scoped_release release;
-             w.step(dt, frames);
+             return w.step(dt, frames);
            },
            py::arg("dt"), py::arg("hands") = py::none(),
            "Advance one frame of dt seconds. hands[i] (a HandFrame) drives the i-th hand of hands(); hands\n"
-           "without a frame are untracked this frame. Everything is validated before anything changes.")
+           "without a frame are untracked this frame. Everything is validated before anything changes.\n"
+           "Returns the StepReport (World.last_step keeps it).")
       .def_property_readonly("time", &World::time)
       .def("state_hash", &World::state_hash,
            "Stable 64-bit hash of everything that decides the world's future (bodies, joints, Bullet's copies\n"

@@ -1,4 +1,4 @@
-// The hand side of World (world.h): hands, grasps, contacts, events and stage reports. Bound after
+// The hand side of World (world.h): hands, grasps, contacts, events and the step summary. Bound after
 // bind_world (it adds methods to the World class); bind_world owns World.step and World.contains.
 #include "bindings.h"
 #include "convert.h"
@@ -47,17 +47,6 @@ void bind_records(py::module_& m) {
                ", secondary=" + std::string(py::repr(optional_id(g.secondary))) + ")";
       });
 
-  py::class_<StageReport>(m, "StageReport", "What one stage of the last step cost, whether it had work, and why.")
-      .def_property_readonly("name", [](const StageReport& r) { return std::string(r.name); })
-      .def_readonly("seconds", &StageReport::seconds)
-      .def_readonly("ran", &StageReport::ran)
-      .def_readonly("why", &StageReport::why)
-      .def("__repr__", [](const StageReport& r) {
-        char cost[32];
-        std::snprintf(cost, sizeof cost, "%.1f us", r.seconds * 1e6);
-        return "StageReport(" + std::string(r.name) + ", " + (r.ran ? "ran" : "skipped") + ", " + cost + ", '" +
-               r.why + "')";
-      });
 }
 
 HandId to_hand_id(py::handle h) { return cast_arg<HandId>(h, "hand"); }
@@ -142,7 +131,7 @@ void bind_world_methods(py::module_& m) {
            "The hand's particles touching the body in the last step: (particles (K,), points (K, 3) on the\n"
            "surface, outward normals (K, 3), depths (K,) in m), sorted by particle.")
       .def("events", &World::events, "Events of the last step (a list; pulled, no callbacks).")
-      .def("stage_reports", &World::stage_reports, "One StageReport per stage of the last step, in order.")
+      .def("last_step", &World::last_step, "The StepReport of the last step (all zero before the first).")
       .def("stage_summary", &World::stage_summary, "Readable: which stages ran, what they cost, why.");
 }
 

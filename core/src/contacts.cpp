@@ -350,7 +350,7 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
 }
 
 // --- line 3: detect hand collision and contact particles ---
-std::string World::Impl::detect_contacts(double dt) {
+StageReport World::Impl::detect_contacts(double dt) {
   for (auto& entry : pairs) {
     entry.second.contacts.clear();
     entry.second.previous_faces.swap(entry.second.entry_faces);
@@ -360,7 +360,7 @@ std::string World::Impl::detect_contacts(double dt) {
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
   std::vector<std::pair<int, int>>& ranges = scratch_ranges;
   const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
-  int tested = 0, touching = 0, candidates = 0;
+  int tested = 0, candidates = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
     if (!h.alive || !h.state.tracked) continue;
@@ -412,12 +412,10 @@ std::string World::Impl::detect_contacts(double dt) {
       keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
-      touching += !it->second.contacts.empty();
     }
   }
-  if (tested == 0) return "skip: no hand near a body";
-  return std::to_string(tested) + " hand-body pair(s) near, " + std::to_string(touching) + " touching, " +
-         std::to_string(candidates) + " particle(s) in groups near a body tested";
+  if (tested == 0) return stage_skipped(SkipReason::NoHandNearBody);
+  return stage_work(tested, candidates);
 }
 
 // The particle index ranges whose group box, grown by the contact reach, overlaps a body's world box: the

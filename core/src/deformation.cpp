@@ -164,7 +164,7 @@ void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
 }
 
 // --- local deformation: penetrating particles move back to the surface (what the user sees) ---
-std::string World::Impl::deform_hands() {
+StageReport World::Impl::deform_hands() {
   std::vector<ParticleContact>& all = scratch_contacts;
   int deformed = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
@@ -192,8 +192,8 @@ std::string World::Impl::deform_hands() {
     }
     deformed += int(h.state.displaced.size());
   }
-  if (deformed == 0) return "skip: no particle inside a body";
-  return std::to_string(deformed) + " particle(s) pushed back to a surface";
+  if (deformed == 0) return stage_skipped(SkipReason::NoParticleInside);
+  return stage_work(deformed, deformed);
 }
 
 }  // namespace handsim

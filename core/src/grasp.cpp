@@ -383,7 +383,7 @@ bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std
 }
 
 // --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
-std::string World::Impl::decide_grasps(double dt) {
+StageReport World::Impl::decide_grasps(double dt) {
   std::vector<Vec3>& directions = scratch_directions;
   std::vector<int>& parts = scratch_parts;
   std::vector<Intent>& alone = scratch_intents;  // per pair in map order: eq. 3 and closing of its hand by itself
@@ -433,8 +433,8 @@ std::string World::Impl::decide_grasps(double dt) {
     if (count == 0 && !pair.tracker.grasped()) it = pairs.erase(it);
     else ++it;
   }
-  if (decided == 0) return "skip: no hand touches a movable body";
-  return std::to_string(decided) + " hand-body pair(s) decided";
+  if (decided == 0) return stage_skipped(SkipReason::NoMovableBodyTouched);
+  return stage_work(decided);
 }
 
 void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
@@ -509,7 +509,7 @@ void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
 }
 
 // --- lines 10, 14: a grasped object keeps its pose relative to its primary hand ---
-std::string World::Impl::follow_primary_hands() {
+StageReport World::Impl::follow_primary_hands() {
   int following = 0;
   for (uint32_t bi : held_bodies()) {
     Body& b = bodies[bi];
@@ -521,12 +521,12 @@ std::string World::Impl::follow_primary_hands() {
     b.angular = capped_speed(v.angular);
     ++following;
   }
-  if (following == 0) return "skip: nothing grasped";
-  return std::to_string(following) + " grasped body(ies) follow their hand";
+  if (following == 0) return stage_skipped(SkipReason::NothingGrasped);
+  return stage_work(following);
 }
 
 // --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
-std::string World::Impl::retake_secondary_hands() {
+StageReport World::Impl::retake_secondary_hands() {
   int slipping = 0;
   for (uint32_t bi : held_bodies()) {
     Body& b = bodies[bi];
@@ -534,8 +534,8 @@ std::string World::Impl::retake_secondary_hands() {
     b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
     ++slipping;
   }
-  if (slipping == 0) return "skip: no second hand holds anything";
-  return std::to_string(slipping) + " second-hand grasp(s) re-taken";
+  if (slipping == 0) return stage_skipped(SkipReason::NoSecondHand);
+  return stage_work(slipping);
 }
 
 }  // namespace handsim

@@ -166,7 +166,7 @@ BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_
 // A hand that holds one part of a jointed object does not push the other parts: its fingers around the lid
 // also graze the base, and the base pushed by the hand that carries the lid hinged to it would be pushed by
 // itself (the experiments saw such a base thrown metres). The parts stay free for the other hand.
-std::string World::Impl::fit_touched_bodies(double dt) {
+StageReport World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3>& from = scratch_from;
   std::vector<Vec3>& to = scratch_to;
   std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
@@ -235,8 +235,8 @@ std::string World::Impl::fit_touched_bodies(double dt) {
   }
   for (uint32_t bi : released) bodies[bi].just_released = false;
   released.clear();
-  if (fitted == 0) return "skip: no free body touched";
-  return std::to_string(fitted) + " touched body(ies) fitted";
+  if (fitted == 0) return stage_skipped(SkipReason::NoFreeBodyTouched);
+  return stage_work(fitted);
 }
 
 }  // namespace handsim

@@ -333,7 +333,7 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 }  // namespace
 
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
-std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
+StageReport World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
   int tracked = 0, skinned = 0, in_reach = 0;
   size_t k = 0;
   for (HandSlot& h : hands) {
@@ -368,7 +368,10 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     // A palm that moved faster than the speed cap since its last frame teleported (a tracker glitch, a
     // re-centred play space): its motion history says nothing about the new place, and what it holds arrives
     // there at rest instead of being flung (a 1e6 m jump threw a held cube at 1.8e7 m/s; issue 22).
-    if (h.has_pose && teleported(h.palm, palm, dt)) h.history.clear();
+    if (h.has_pose && teleported(h.palm, palm, dt)) {
+      h.history.clear();
+      report.warnings |= warning_bit(StepWarning::HandTeleported);
+    }
     h.palm = palm;
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
@@ -377,10 +380,8 @@ std::string World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;
   }
-  if (tracked == 0) return "skip: no tracked hand";
-  return std::to_string(tracked) + " tracked hand(s), " + std::to_string(skinned) + " near a body (" +
-         std::to_string(in_reach) + " particle(s) within reach of a body skinned), " +
-         std::to_string(tracked - skinned) + " far (particles left unskinned)";
+  if (tracked == 0) return stage_skipped(SkipReason::NoTrackedHand);
+  return stage_work(tracked, in_reach);
 }
 
 // A hand near a body: only the particle groups whose bone-derived box comes within contact reach of a body

@@ -239,21 +239,14 @@ std::vector<Event> World::events() const {
   const auto held = lock();
   return impl_->events;
 }
-std::vector<StageReport> World::stage_reports() const {
+StepReport World::last_step() const {
   const auto held = lock();
-  return impl_->reports;
+  return impl_->report;
 }
 
 std::string World::stage_summary() const {
   const auto held = lock();
-  std::string out;
-  for (const StageReport& r : impl_->reports) {
-    char line[96];
-    std::snprintf(line, sizeof line, "%-12s %s %9.1f us  ", r.name, r.ran ? "ran " : "skip",
-                  r.seconds * 1e6);
-    out += line + r.why + "\n";
-  }
-  return out;
+  return summary(impl_->report);
 }
 
 // --- hands ---
@@ -382,7 +375,7 @@ void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular
   impl_->backend->write(b.backend, b.pose, linear, angular);
 }
 
-void World::step(double dt) { step(dt, {}); }  // locks there
+StepReport World::step(double dt) { return step(dt, {}); }  // locks there
 
 double World::time() const {
   const auto held = lock();

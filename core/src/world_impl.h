@@ -83,8 +83,13 @@ struct Joint {
   Quat solved_rotation = Quat::Identity();  // ball: the micro-simulator's last answer
   int constraint = -1;                 // soft: Bullet constraint handle
   int depth = 0;                       // hard: joints between the child and the root of its group
-  JointSolveResult last;
+  JointSolveResult last;  // the micro-simulator's solve of this step, if `solved`
   bool solved = false;
+
+  void clear_solve() {
+    last = JointSolveResult();
+    solved = false;
+  }
 };
 
 struct HandSlot {
@@ -145,7 +150,7 @@ struct World::Impl {
   // How many of `events` (at the front) the last step raised. The next step drops those and keeps the ones
   // that removals raised after it, so a caller who reads events() after each step sees those too.
   size_t step_events = 0;
-  std::vector<StageReport> reports;
+  StepReport report;  // of the last step (last_step)
   // What moves (world_activity.cpp). body_boxes: every body slot's world bounds, 6 doubles (lo xyz, hi xyz;
   // empty for a dead slot), in one flat array: the hand-body broadphase scans it instead of the bodies. The
   // lists are what the per-step passes walk instead of every body, so settled and static bodies cost nothing.
@@ -215,12 +220,12 @@ struct World::Impl {
   // pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps,
   // follow_primary_hands and retake_secondary_hands grasp.cpp, fit_touched_bodies pose_fit.cpp, simulate
   // world_step.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
-  std::string pose_hands(const std::vector<HandFrame>& frames, double dt);
-  std::string detect_contacts(double dt);
+  StageReport pose_hands(const std::vector<HandFrame>& frames, double dt);
+  StageReport detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
                             std::vector<std::pair<int, int>>& ranges) const;
-  std::string deform_hands();
+  StageReport deform_hands();
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
   std::vector<ParticleContact> scratch_contacts;       // detect_contacts, then deform_hands
   std::vector<std::pair<int, int>> scratch_ranges;     // detect_contacts
@@ -228,7 +233,7 @@ struct World::Impl {
   std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
   std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
   std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
-  std::string decide_grasps(double dt);
+  StageReport decide_grasps(double dt);
   struct Intent {
     bool opposing = false;  // eq. 3 (across parts when a grasp would begin)
     bool closing = false;   // the hand closed by closing_distance within closing_window_s
@@ -242,11 +247,11 @@ struct World::Impl {
   bool hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
                     std::vector<int>& parts) const;
   double closing_needed() const;
-  std::string follow_primary_hands();
-  std::string fit_touched_bodies(double dt);
-  std::string simulate(double dt);
-  std::string solve_joints(double dt);
-  std::string retake_secondary_hands();
+  StageReport follow_primary_hands();
+  StageReport fit_touched_bodies(double dt);
+  StageReport simulate(double dt);
+  StageReport solve_joints(double dt);
+  StageReport retake_secondary_hands();
 
   void validate_step(double dt, const std::vector<HandFrame>& frames) const;
 
@@ -270,6 +275,19 @@ struct World::Impl {
   bool physics_needed(double dt);
   void read_dynamic_bodies();
 };
+
+// What a stage returns: its work, or why it had none.
+inline StageReport stage_work(int work, int particles = 0) {
+  StageReport r;
+  r.work = work;
+  r.particles = particles;
+  return r;
+}
+inline StageReport stage_skipped(SkipReason why) {
+  StageReport r;
+  r.skip = why;
+  return r;
+}
 
 // A generation no other slot of any world in this process has had (world.cpp).
 uint32_t fresh_generation();

@@ -411,15 +411,14 @@ void World::Impl::read_soft_joint(Joint& j) {
 }
 
 // --- line 19 of Algorithm 1: grasped children of hard joints get their coordinate from the hand ---
-std::string World::Impl::solve_joints(double dt) {
-  int live = 0, solved = 0;
+StageReport World::Impl::solve_joints(double dt) {
+  int live = 0;
   for (uint32_t k : joint_order) {
     Joint& j = joints[k];
     const Body& c = bodies[j.child];
     if (!c.grasp.grasped) continue;
     const Pose simulated = hands[c.grasp.primary.index].palm * c.grasp.primary_relative;
     solve_grasped(j, simulated, dt);
-    solved += j.solved;
   }
   if (!joint_order.empty()) place_children();
   for (Joint& j : joints) {
@@ -427,8 +426,8 @@ std::string World::Impl::solve_joints(double dt) {
     ++live;
     if (j.model == JointModel::Soft) read_soft_joint(j);
   }
-  if (live == 0) return "skip: no joints";
-  return std::to_string(live) + " joint(s), " + std::to_string(solved) + " grasped child(ren) solved";
+  if (live == 0) return stage_skipped(SkipReason::NoJoints);
+  return stage_work(live);
 }
 
 // --- public API ---

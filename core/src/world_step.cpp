@@ -12,31 +12,36 @@
 
 namespace handsim {
 
-void World::step(double dt, const std::vector<HandFrame>& frames) {
+StepReport World::step(double dt, const std::vector<HandFrame>& frames) {
   const auto held = lock();
   Impl& w = *impl_;
   w.validate_step(dt, frames);  // nothing below runs on bad input, so the world stays intact
   w.events.erase(w.events.begin(), w.events.begin() + std::ptrdiff_t(std::min(w.step_events, w.events.size())));
-  w.reports.clear();
+  w.report = StepReport();
+  for (Joint& j : w.joints) j.clear_solve();  // JointState's solve fields are this step's only
+  const uint64_t nonfinite_before = w.nonfinite_recoveries;
   w.refresh_moving_boxes();
-  auto stage = [&w](const char* name, auto&& run) {
+  auto stage = [&w](Stage s, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::string why = run();
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const bool ran = why.rfind("skip: ", 0) != 0;
-    w.reports.push_back({name, seconds, ran, std::move(why)});
+    StageReport r = run();
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.stage = s;
+    w.report.stages[size_t(s)] = r;
   };
-  stage("skinning", [&] { return w.pose_hands(frames, dt); });       // lines 1-2: eq. 1, particle positions
-  stage("contacts", [&] { return w.detect_contacts(dt); });      // line 3
-  stage("deformation", [&] { return w.deform_hands(); });        // particles pushed back to the surface
-  stage("grasp", [&] { return w.decide_grasps(dt); });           // lines 4-9, 11-13, 16: eq. 3
-  stage("attach", [&] { return w.follow_primary_hands(); });     // lines 10, 14
-  stage("pose_fit", [&] { return w.fit_touched_bodies(dt); });   // line 17: eq. 2
-  stage("dynamics", [&] { return w.simulate(dt); });             // line 18
-  stage("joints", [&] { return w.solve_joints(dt); });             // line 19: eq. 4
-  stage("slip", [&] { return w.retake_secondary_hands(); });     // line 20: eq. 5
+  stage(Stage::Skinning, [&] { return w.pose_hands(frames, dt); });        // lines 1-2: eq. 1, particle positions
+  stage(Stage::Contacts, [&] { return w.detect_contacts(dt); });           // line 3
+  stage(Stage::Deformation, [&] { return w.deform_hands(); });             // particles pushed back to the surface
+  stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
+  stage(Stage::Attach, [&] { return w.follow_primary_hands(); });          // lines 10, 14
+  stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
+  stage(Stage::Dynamics, [&] { return w.simulate(dt); });                  // line 18
+  stage(Stage::Joints, [&] { return w.solve_joints(dt); });                // line 19: eq. 4
+  stage(Stage::Slip, [&] { return w.retake_secondary_hands(); });          // line 20: eq. 5
+  w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
+  if (w.report.nonfinite_bodies > 0) w.report.warnings |= warning_bit(StepWarning::NonFiniteRecovered);
   w.time += dt;
   w.step_events = w.events.size();
+  return w.report;
 }
 
 void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames) const {
@@ -63,13 +68,15 @@ void World::Impl::validate_step(double dt, const std::vector<HandFrame>& frames)
 }
 
 // --- line 18: physics for everything else, in fixed substeps ---
-std::string World::Impl::simulate(double dt) {
+StageReport World::Impl::simulate(double dt) {
   const double h = def.fixed_substep;
   accumulator += dt;
   // The small tolerance keeps dt = 4h from yielding 3 substeps through rounding.
   int n = int(std::floor(accumulator / h + 1e-9));
   if (n > def.max_substeps) {
     n = def.max_substeps;
+    report.dropped_seconds = accumulator - n * h;
+    report.warnings |= warning_bit(StepWarning::SubstepsDropped);
     accumulator = n * h;  // drop what cannot be caught up
   }
   const bool physics = n > 0 && physics_needed(dt);
@@ -78,11 +85,10 @@ std::string World::Impl::simulate(double dt) {
   if (n > 0)
     for (uint32_t bi : held_bodies())
       if (bodies[bi].motion == BodyMotion::Kinematic && !bodies[bi].jointed()) bodies[bi].synced_pose = bodies[bi].pose;
-  if (n == 0) return "skip: dt shorter than one substep (accumulated)";
-  if (!physics)
-    return std::to_string(n) + " substep(s) without Bullet: no dynamic body awake" +
-           (joint_order.empty() ? "" : ", hard joints integrated");
-  return std::to_string(n) + " substep(s)";
+  report.substeps = n;
+  report.bullet = physics;
+  if (n == 0) return stage_skipped(SkipReason::BelowSubstep);
+  return stage_work(n);
 }
 
 void World::Impl::substep(double h, int i, int n, bool physics) {

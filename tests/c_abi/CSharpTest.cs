@@ -71,7 +71,8 @@ static class CSharpTest
         {"handsim_hand_def", typeof(HandDef)}, {"handsim_joint_pose", typeof(JointPose)},
         {"handsim_hand_frame", typeof(HandFrame)}, {"handsim_skinned_mesh", typeof(SkinnedMesh)},
         {"handsim_hand_info", typeof(HandInfo)}, {"handsim_hand_pose_params", typeof(HandPoseParams)},
-        {"handsim_event", typeof(Event)}, {"handsim_stage_report", typeof(StageReport)},
+        {"handsim_event", typeof(Event)}, {"handsim_stage_report", typeof(StageReport)}, {"handsim_step_stage", typeof(StepStage)},
+        {"handsim_step_report", typeof(StepReport)},
         {"handsim_jewelry_box_def", typeof(JewelryBoxDef)}, {"handsim_jewelry_box", typeof(JewelryBox)},
         {"handsim_layout_entry", typeof(LayoutEntry)}, {"handsim_enum_entry", typeof(EnumEntry)},
     };
@@ -89,6 +90,13 @@ static class CSharpTest
     }
 
     static int NativeSize(Type t) { return Marshal.SizeOf(t.IsEnum ? Enum.GetUnderlyingType(t) : t); }
+    // A field's native size; a fixed array (ByValArray) is SizeConst elements.
+    static int NativeSize(FieldInfo f)
+    {
+        if (!f.FieldType.IsArray) return NativeSize(f.FieldType);
+        var m = (MarshalAsAttribute)Attribute.GetCustomAttribute(f, typeof(MarshalAsAttribute));
+        return (m == null ? 0 : m.SizeConst) * NativeSize(f.FieldType.GetElementType());
+    }
 
     static void TestLayouts()
     {
@@ -117,7 +125,7 @@ static class CSharpTest
                 if (Snake(fi.Name) == f) field = fi;
             if (field == null) { Check(false, s + "." + f + ": no C# field"); continue; }
             int offset = Marshal.OffsetOf(type, field.Name).ToInt32();
-            int fsize = NativeSize(field.FieldType);
+            int fsize = NativeSize(field);
             Check(offset == e.Offset && fsize == e.Size, s + "." + f + ": C# offset " + offset + " size " + fsize +
                   ", C offset " + e.Offset + " size " + e.Size);
             seen.Add(s + "." + f);
@@ -193,7 +201,7 @@ static class CSharpTest
                 watch.Stop();
                 stepSeconds.Add(watch.Elapsed.TotalSeconds);
                 double inStages = 0;
-                foreach (StageTiming st in world.StageReports()) inStages += st.Seconds;
+                foreach (StepStage st in world.LastStep().Stages) inStages += st.Seconds;
                 outsideSeconds.Add(watch.Elapsed.TotalSeconds - inStages);
                 JointState s = world.JointState(box.Hinge);
                 maxAngle = Math.Max(maxAngle, s.Value);
@@ -217,8 +225,9 @@ static class CSharpTest
                 Check(maxViolation <= 1e-9, "hinge violation " + maxViolation);
                 Check(grasped > Frames / 2, "grasped in only " + grasped + " frames");
                 Check(graspBegins == 1, graspBegins + " grasp-begin events");
-                StageTiming[] stages = world.StageReports();
-                Check(stages.Length >= 9 && stages[0].Name == "skinning", "stage reports: " + stages.Length);
+                StepReport last = world.LastStep();
+                Check(last.Stages.Length == 9 && last.Get(Stage.Skinning).Ran && last.Get(Stage.Skinning).Work == 1,
+                      "last step: " + last.Get(Stage.Skinning));
                 Check(world.StageSummary().Contains("dynamics"), "stage summary");
                 Vec3[] particles = null, deformed = null;
                 int np = world.HandParticles(hand, false, ref particles);
@@ -611,6 +620,26 @@ static class CSharpTest
         }
     }
 
+    // The step report: a skipped stage names its reason, a huge dt raises SubstepsDropped.
+    static void TestStepReport()
+    {
+        using (var world = new World())
+        {
+            world.Step(Dt);
+            StepReport r = world.LastStep();
+            Check(r.Get(Stage.Skinning).Skip == SkipReason.NoTrackedHand && r.Get(Stage.Joints).Skip == SkipReason.NoJoints &&
+                  r.Get(Stage.Dynamics).Ran && r.Substeps == 4 && r.Warnings == 0,
+                  "no hand: " + r.Get(Stage.Skinning) + ", " + r.Get(Stage.Joints) + ", " + r.Substeps + " substeps");
+            world.Step(1.0);  // 240 substeps owed, 8 run
+            r = world.LastStep();
+            Check(r.Has(StepWarning.SubstepsDropped) && r.Substeps == 8 && Math.Abs(r.DroppedSeconds - (1.0 - 8.0 / 240)) < 1e-12,
+                  "huge dt: " + r.Warnings + ", " + r.Substeps + " substeps, " + r.DroppedSeconds + " s dropped");
+            world.Step(Dt);
+            Check(!world.LastStep().Has(StepWarning.SubstepsDropped), "the warning is the step's only");
+            Console.WriteLine("step report: skip reasons and the dropped-substeps warning as the core reports them");
+        }
+    }
+
     static int Main(string[] args)
     {
         if (args.Length != 1) { Console.Error.WriteLine("usage: CSharpTest.exe <c_host_hash_file>"); return 2; }
@@ -622,6 +651,7 @@ static class CSharpTest
         TestScenario(args[0]);
         TestBadInputs();
         TestSaveRestore();
+        TestStepReport();
         TestShapesJointsAndMesh();
         TestUnityConversions();
         TestFrameLoopAllocations();

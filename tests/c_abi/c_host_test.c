@@ -356,6 +356,14 @@ static void test_hand_outputs(handsim_world* world, handsim_hand_id hand) {
   for (i = 0; i < n; ++i) printf("  stage %-12s %s %8.1f us\n", reports[i].name, reports[i].ran ? "ran " : "skip",
                                  reports[i].seconds * 1e6);
   CHECK(strcmp(reports[0].name, "skinning") == 0 && reports[0].ran, "first stage %s", reports[0].name);
+  {
+    handsim_step_report last;
+    MUST(handsim_last_step(world, &last));
+    CHECK(last.stages[HANDSIM_STAGE_SKINNING].stage == HANDSIM_STAGE_SKINNING &&
+              last.stages[HANDSIM_STAGE_SKINNING].skip == HANDSIM_SKIP_NONE &&
+              last.stages[HANDSIM_STAGE_SKINNING].work == 1 && last.stages[HANDSIM_STAGE_SKINNING].particles > 0,
+          "last step: skinning skip %d work %d", (int)last.stages[0].skip, (int)last.stages[0].work);
+  }
   MUST(handsim_stage_summary(world, NULL, 0, &n));
   CHECK(n > 1 && n <= (int32_t)sizeof summary, "summary length %d", (int)n);
   MUST(handsim_stage_summary(world, summary, (int32_t)sizeof summary, &n));
@@ -460,6 +468,35 @@ static void test_save_restore(void) {
 }
 
 /* --- bad inputs: documented statuses and messages, and the world is unchanged --------------------------------- */
+
+/* --- the step report: skip reasons and warnings -------------------------------------------------------------- */
+
+static void test_step_report(void) {
+  handsim_world* world = NULL;
+  handsim_step_report r;
+  handsim_body_def def;
+  handsim_body_id body;
+  MUST(handsim_world_create(NULL, &world));
+  MUST(handsim_last_step(world, &r));
+  CHECK(r.substeps == 0 && r.warnings == 0, "before the first step: %d substeps", (int)r.substeps);
+  MUST(handsim_body_def_default(&def));
+  def.pose.position.y = 1;
+  MUST(handsim_add_body(world, &def, &body));
+  MUST(handsim_step(world, 1.0 / 60, NULL, 0));
+  MUST(handsim_last_step(world, &r));
+  CHECK(r.stages[HANDSIM_STAGE_SKINNING].skip == HANDSIM_SKIP_NO_TRACKED_HAND &&
+            r.stages[HANDSIM_STAGE_JOINTS].skip == HANDSIM_SKIP_NO_JOINTS &&
+            r.stages[HANDSIM_STAGE_DYNAMICS].skip == HANDSIM_SKIP_NONE && r.substeps == 4 && r.warnings == 0,
+        "no hand: skinning skip %d, joints skip %d, %d substeps", (int)r.stages[0].skip, (int)r.stages[7].skip,
+        (int)r.substeps);
+  MUST(handsim_step(world, 1.0, NULL, 0)); /* 240 substeps owed, 8 run */
+  MUST(handsim_last_step(world, &r));
+  CHECK((r.warnings & (1u << HANDSIM_WARNING_SUBSTEPS_DROPPED)) && r.substeps == 8 &&
+            fabs(r.dropped_seconds - (1.0 - 8.0 / 240)) < 1e-12,
+        "huge dt: warnings %u, %d substeps, %g s dropped", (unsigned)r.warnings, (int)r.substeps, r.dropped_seconds);
+  REJECT(NULL, handsim_last_step(world, NULL), HANDSIM_INVALID_ARGUMENT, "out_report: must not be null");
+  MUST(handsim_world_destroy(world));
+}
 
 static void test_bad_inputs(void) {
   handsim_world* world = NULL;
@@ -782,6 +819,7 @@ int main(int argc, char** argv) {
   test_mirrored_defs();
   test_scenario(argv[1], argc > 2 ? argv[2] : NULL);
   test_shapes_and_joints();
+  test_step_report();
   test_bad_inputs();
   test_save_restore();
   printf("%d checks, %d failures\n", g_checks, g_failures);

@@ -88,9 +88,9 @@ double median(std::vector<double> v) {
   return v.empty() ? 0 : v[v.size() / 2];
 }
 
-double stage_seconds(const std::vector<StageReport>& reports) {
+double stage_seconds(const StepReport& report) {
   double sum = 0;
-  for (const StageReport& r : reports) sum += r.seconds;
+  for (const StageReport& r : report.stages) sum += r.seconds;
   return sum;
 }
 
@@ -142,12 +142,11 @@ void bench(int reps) {
       cpp_steps.push_back(t_cpp);
       c_steps.push_back(t_c);
       differences.push_back(t_c - t_cpp);
-      cpp_outside.push_back(t_cpp - stage_seconds(world.stage_reports()));
-      std::vector<handsim_stage_report> reports(16);
-      int32_t n = 0;
-      MUST(handsim_stage_reports(cworld, reports.data(), int32_t(reports.size()), &n));
+      cpp_outside.push_back(t_cpp - stage_seconds(world.last_step()));
+      handsim_step_report report;
+      MUST(handsim_last_step(cworld, &report));
       double in_stages = 0;
-      for (int32_t k = 0; k < n; ++k) in_stages += reports[size_t(k)].seconds;
+      for (const handsim_step_stage& s : report.stages) in_stages += s.seconds;
       c_outside.push_back(t_c - in_stages);
     }
     uint64_t chash = 0;

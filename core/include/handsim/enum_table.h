@@ -102,6 +102,45 @@
   X(JointType, Ball, 2, BALL, HANDSIM_JOINT_BALL)                                                         \
   X(JointType, Fixed, 3, FIXED, HANDSIM_JOINT_FIXED)
 
+/* The stages of one step (Algorithm 1 of Kim & Park), in the order they run. What a stage's `work` counts:
+ * skinning: tracked hands; contacts: hand-body pairs near enough to test; deformation: particles pushed back;
+ * grasp: hand-body pairs decided; attach: grasped bodies moved with their hand; pose_fit: touched free bodies
+ * fitted (eq. 2); dynamics: substeps; joints: live joints; slip: second-hand grasps re-taken (eq. 5). */
+#define HANDSIM_ENUM_STAGE(X)                                                                             \
+  X(Stage, Skinning, 0, SKINNING, HANDSIM_STAGE_SKINNING)                                                 \
+  X(Stage, Contacts, 1, CONTACTS, HANDSIM_STAGE_CONTACTS)                                                 \
+  X(Stage, Deformation, 2, DEFORMATION, HANDSIM_STAGE_DEFORMATION)                                        \
+  X(Stage, Grasp, 3, GRASP, HANDSIM_STAGE_GRASP)                                                          \
+  X(Stage, Attach, 4, ATTACH, HANDSIM_STAGE_ATTACH)                                                       \
+  X(Stage, PoseFit, 5, POSE_FIT, HANDSIM_STAGE_POSE_FIT)                                                  \
+  X(Stage, Dynamics, 6, DYNAMICS, HANDSIM_STAGE_DYNAMICS)                                                 \
+  X(Stage, Joints, 7, JOINTS, HANDSIM_STAGE_JOINTS)                                                       \
+  X(Stage, Slip, 8, SLIP, HANDSIM_STAGE_SLIP)
+
+/* Why a stage had nothing to do in the last step; None: it ran. */
+#define HANDSIM_ENUM_SKIP_REASON(X)                                                                       \
+  X(SkipReason, None, 0, NONE, HANDSIM_SKIP_NONE)                                                         \
+  X(SkipReason, NoTrackedHand, 1, NO_TRACKED_HAND, HANDSIM_SKIP_NO_TRACKED_HAND)                          \
+  X(SkipReason, NoHandNearBody, 2, NO_HAND_NEAR_BODY, HANDSIM_SKIP_NO_HAND_NEAR_BODY)                     \
+  X(SkipReason, NoParticleInside, 3, NO_PARTICLE_INSIDE, HANDSIM_SKIP_NO_PARTICLE_INSIDE)                 \
+  X(SkipReason, NoMovableBodyTouched, 4, NO_MOVABLE_BODY_TOUCHED, HANDSIM_SKIP_NO_MOVABLE_BODY_TOUCHED)   \
+  X(SkipReason, NothingGrasped, 5, NOTHING_GRASPED, HANDSIM_SKIP_NOTHING_GRASPED)                         \
+  X(SkipReason, NoFreeBodyTouched, 6, NO_FREE_BODY_TOUCHED, HANDSIM_SKIP_NO_FREE_BODY_TOUCHED)            \
+  /* the accumulated dt is still shorter than one fixed substep */                                        \
+  X(SkipReason, BelowSubstep, 7, BELOW_SUBSTEP, HANDSIM_SKIP_BELOW_SUBSTEP)                               \
+  X(SkipReason, NoJoints, 8, NO_JOINTS, HANDSIM_SKIP_NO_JOINTS)                                           \
+  X(SkipReason, NoSecondHand, 9, NO_SECOND_HAND, HANDSIM_SKIP_NO_SECOND_HAND)
+
+/* What a step dropped or recovered from, silently before. The number is a bit index: the step report's
+ * `warnings` has bit (1 << number) set for each warning raised. */
+#define HANDSIM_ENUM_STEP_WARNING(X)                                                                      \
+  /* dt exceeded max_substeps fixed substeps; the rest was dropped (StepReport::dropped_seconds) */       \
+  X(StepWarning, SubstepsDropped, 0, SUBSTEPS_DROPPED, HANDSIM_WARNING_SUBSTEPS_DROPPED)                  \
+  /* Bullet returned a non-finite body state; the body kept its last finite pose, at rest */              \
+  X(StepWarning, NonFiniteRecovered, 1, NON_FINITE_RECOVERED, HANDSIM_WARNING_NON_FINITE_RECOVERED)       \
+  /* a palm moved faster than the speed cap: its motion history was cleared (what it holds arrives at rest) */ \
+  X(StepWarning, HandTeleported, 2, HAND_TELEPORTED, HANDSIM_WARNING_HAND_TELEPORTED)
+
 /* Every row of every enum above, in this order. */
 #define HANDSIM_ENUM_VALUES(X)                                                                            \
   HANDSIM_ENUM_STATUS(X)                                                                                  \
@@ -115,6 +154,9 @@
   HANDSIM_ENUM_BODY_MOTION(X)                                                                             \
   HANDSIM_ENUM_EVENT_TYPE(X)                                                                              \
   HANDSIM_ENUM_EVENT_REASON(X)                                                                            \
-  HANDSIM_ENUM_JOINT_TYPE(X)
+  HANDSIM_ENUM_JOINT_TYPE(X)                                                                              \
+  HANDSIM_ENUM_STAGE(X)                                                                                   \
+  HANDSIM_ENUM_SKIP_REASON(X)                                                                             \
+  HANDSIM_ENUM_STEP_WARNING(X)
 
 #endif /* HANDSIM_ENUM_TABLE_H */

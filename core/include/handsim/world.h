@@ -6,6 +6,7 @@
 #include "handsim/hand.h"
 #include "handsim/joint.h"
 #include "handsim/shape.h"
+#include "handsim/step_report.h"
 #include "handsim/types.h"
 
 #include <cstdint>
@@ -105,20 +106,13 @@ struct JointState {
   double violation = 0;
   // Radians (hinge) or metres (slider) beyond a limit, measured from the poses; 0 inside the limits.
   double overshoot = 0;
-  // The micro-simulator's solve of the last step (the child was grasped or pushed); solved = false otherwise.
+  // The micro-simulator's solve of the last step (the child was grasped or pushed); solved = false and the
+  // rest zero otherwise (cleared at the start of every step).
   bool solved = false;
   double cost = 0;
   int iterations = 0;
   JointTermination termination = JointTermination::Converged;
   double solve_seconds = 0;
-};
-
-// What one stage of the last step cost, whether it had work, and why (or why not).
-struct StageReport {
-  const char* name = "";
-  double seconds = 0;
-  bool ran = false;
-  std::string why;
 };
 
 // Thread safety: every member function may be called from any thread. Calls on one world are serialised by
@@ -196,13 +190,14 @@ class World {
   std::vector<Event> events() const;
 
   // --- stepping ---
-  void step(double dt);
+  StepReport step(double dt);
   // One frame of Algorithm 1: hands[i] drives the i-th hand of hands() (fewer frames than hands: the
-  // rest are untracked this frame). Everything is validated before anything changes.
-  void step(double dt, const std::vector<HandFrame>& hands);
+  // rest are untracked this frame). Everything is validated before anything changes. Returns what the step
+  // did, as last_step() does until the next step.
+  StepReport step(double dt, const std::vector<HandFrame>& hands);
   double time() const;
-  std::vector<StageReport> stage_reports() const;
-  std::string stage_summary() const;  // readable: which stages ran, what they cost, why
+  StepReport last_step() const;       // all zero before the first step and after reset()
+  std::string stage_summary() const;  // summary(last_step()): which stages ran, what they cost, why
 
   // A stable 64-bit FNV-1a hash of everything that decides the world's future (what save_state saves but the
   // caches: bodies, joints, Bullet's copies of the bodies and their sleep, grasp trackers, entry faces, hand

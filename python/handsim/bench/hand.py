@@ -2,7 +2,7 @@
 one Bullet object per particle, the paper's way) and the largest particle gap of both samplings.
 
 Every figure is a median over repeated single-threaded calls. Times measured through Python include the
-numpy conversion of the arguments and results; the stage times come from World.stage_reports (C++ clocks).
+numpy conversion of the arguments and results; the stage times come from the StepReport World.step returns (C++ clocks).
 """
 import numpy as np
 
@@ -27,8 +27,8 @@ def _stage_seconds(world, frames, stage, repeats):
     """Median and p99 of one stage's C++ time over `repeats` steps cycling through `frames`."""
     out = np.empty(repeats)
     for i in range(repeats):
-        world.step(DT, [frames[i % len(frames)]])
-        out[i] = next(r.seconds for r in world.stage_reports() if r.name == stage)
+        report = world.step(DT, [frames[i % len(frames)]])
+        out[i] = next(r.seconds for r in report.stages if r.name == stage)
     return summary(out)
 
 

@@ -12,7 +12,6 @@ touched, not what exists.
 Every world is built first; then the timing runs in rounds, each round timing a block of steps of every world
 in turn (interleaved), and a world's figure is the median over rounds of its block medians.
 """
-import re
 import time
 
 import numpy as np
@@ -87,9 +86,7 @@ def _configs(quick):
 
 def _in_reach(world):
     """Particles skinned within reach of a body in the last step (from the skinning stage's report)."""
-    why = next(r.why for r in world.stage_reports() if r.name == "skinning")
-    m = re.search(r"(\d+) particle\(s\) within reach", why)
-    return int(m.group(1)) if m else 0
+    return world.last_step().stage(handsim.Stage.SKINNING).particles
 
 
 def run(quick=False):
@@ -110,9 +107,10 @@ def run(quick=False):
             medians.append(float(np.median(t)))
     rows = []
     for meta, world, frames, medians in built:
-        stages = {r.name: r.why for r in world.stage_reports()}
+        report = world.last_step()
+        dynamics = "ran" if report.bullet else ("skipped" if report.substeps else "-")
         rows.append({**meta, "median_s": float(np.median(medians)), "in_reach": _in_reach(world),
-                     "dynamics": stages.get("dynamics", "")})
+                     "dynamics": dynamics})
     return {"rows": rows, "rounds": rounds, "block": block, "goals": goals(rows)}
 
 
@@ -153,7 +151,7 @@ def table_rows(result):
                 "no_hand": f"{r.get('bodies')} {r.get('kind')}" if r.get("bodies") else "empty world",
                 "hands": f"{r.get('hands')} hand(s)"}[r["table"]]
         rows.append((r["table"], what, f"{r['median_s'] * 1e6:.1f}", r["in_reach"],
-                     "skipped" if "without Bullet" in r["dynamics"] else ("ran" if "substep" in r["dynamics"] else "-")))
+                     r["dynamics"]))
     return ["table", "configuration", "step median us", "particles in reach", "Bullet"], rows
 
 

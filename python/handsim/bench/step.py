@@ -12,7 +12,7 @@ Pipelines: "lean" = WorldDef() (culling, render skinning only when read, closed-
 skinned every step, particles as Bullet objects, Ceres LM joints when built with Ceres).
 
 Each row: median and p99 of world.step (time.perf_counter around the call, single thread, after warm-up) and the
-median of every stage's C++ time (World.stage_reports). "render_read_*" is a second pass over the same frames
+median of every stage's C++ time (the StepReport World.step returns). "render_read_*" is a second pass over the same frames
 that reads every hand's render vertices after the step (for lean that is where render skinning happens).
 A full run (not --quick) also writes docs/img/step_scaling.png and regenerates docs/performance.md.
 """
@@ -127,9 +127,9 @@ def measure(scene, pipeline, particles=DEFAULT_PARTICLES, render=DEFAULT_RENDER,
     for i in range(frames):
         f = inputs[i] if inputs is not None else frame(i)
         t0 = time.perf_counter()
-        world.step(DT, f)
+        report = world.step(DT, f)
         times[i] = time.perf_counter() - t0
-        for r in world.stage_reports():
+        for r in report.stages:
             stages.setdefault(r.name, []).append(r.seconds)
         if watched is not None:
             touching.append(sum(world.body_contact_count(watched, h) for h in hands))
@@ -334,7 +334,7 @@ def report(result):
     w("Method: each scene is built with the shared builders (`build_jewelry_box`, `lid_pinch_palm`, "
       "`make_hand_frame`), warmed up, then `world.step(1/60, frames)` is timed with `time.perf_counter` for "
       f"{result['frames']} frames ({result['sweep_frames']} per sweep point). Stage times are medians of "
-      "`World.stage_reports()` (C++ clocks). \"render read\" is a second pass that reads every hand's "
+      "the `StepReport` `World.step` returns (C++ clocks). \"render read\" is a second pass that reads every hand's "
       "`hand_render_vertices` after the step: in the lean pipeline that is where render skinning happens; the "
       "paper pipeline skins the render mesh inside the step (stage `skinning`) and the read is a copy. "
       "\"touching\" is the median number of particle contacts on the scene's watched body (the lid, the box).")
