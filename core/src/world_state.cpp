@@ -546,7 +546,7 @@ void World::Impl::restore_state(const uint8_t* data, size_t size, bool keep_even
   if (!keep_events) {
     events.clear();
     step_events = 0;
-    reports.clear();
+    report = StepReport();
   }
 }
 
