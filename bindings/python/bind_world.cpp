@@ -226,7 +226,7 @@ void bind_world_class(py::module_& m) {
            py::arg("state"),
            "Put the world in a state from save_state() (bytes, bytearray or memoryview). The world must be built\n"
            "alike (same WorldDef, same adds and removes of bodies, joints and hands); ids stay this world's;\n"
-           "events() and stage_reports() are emptied. Bad bytes raise handsim.Error naming 'state', world intact.");
+           "events() and last_step() are emptied. Bad bytes raise handsim.Error naming 'state', world intact.");
 }
 
 }  // namespace
