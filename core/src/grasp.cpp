@@ -241,6 +241,13 @@ void HandMotionHistory::push(const Pose& palm, double time) {
   samples_[static_cast<size_t>(next_)] = {p, time};
   next_ = (next_ + 1) % window();
   count_ = std::min(count_ + 1, window());
+  linear_ = linear_slope();
+  angular_ = angular_slope();
+}
+
+void HandMotionHistory::clear() {
+  count_ = 0;
+  linear_ = angular_ = Vec3::Zero();
 }
 
 bool HandMotionHistory::in_time_order() const {
@@ -271,7 +278,7 @@ double HandMotionHistory::time_spread() const {
 }
 
 // Least-squares slope of x(t): sum (tau_k - mean) x_k / sum (tau_k - mean)^2, with x_k relative to the newest.
-Vec3 HandMotionHistory::linear_velocity() const {
+Vec3 HandMotionHistory::linear_slope() const {
   if (!has_velocity()) return Vec3::Zero();
   double mean = mean_time_offset();
   Vec3 num = Vec3::Zero();
@@ -282,7 +289,7 @@ Vec3 HandMotionHistory::linear_velocity() const {
 
 // Same slope for the rotation vectors r_k = log(q_k q_newest^-1). Under a constant world-frame angular
 // velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is w.
-Vec3 HandMotionHistory::angular_velocity() const {
+Vec3 HandMotionHistory::angular_slope() const {
   if (!has_velocity()) return Vec3::Zero();
   double mean = mean_time_offset();
   Quat newest_inv = sample(0).pose.orientation.conjugate();

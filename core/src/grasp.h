@@ -152,13 +152,15 @@ class HandMotionHistory {
 
   // Times must be finite and strictly increasing; poses finite with unit quaternions. Throws handsim::Error.
   void push(const Pose& palm, double time);
-  void clear() { count_ = 0; }
+  void clear();
   int size() const { return count_; }
   int window() const { return static_cast<int>(samples_.size()); }
   bool has_velocity() const { return count_ >= 2; }  // below that, the velocities are zero
 
-  Vec3 linear_velocity() const;   // of the palm position (m/s)
-  Vec3 angular_velocity() const;  // world frame (rad/s)
+  // Both are slopes over the whole history, evaluated once per push (the step asks for them per pair and
+  // per held body).
+  Vec3 linear_velocity() const { return linear_; }    // of the palm position (m/s)
+  Vec3 angular_velocity() const { return angular_; }  // world frame (rad/s)
   // Velocity of a point rigidly attached to the palm, at its current world position x: v + w x (x - palm),
   // with palm the latest palm position. This is what an object released from the hand should get.
   Vec3 point_velocity(const Vec3& world_point) const;
@@ -186,10 +188,13 @@ class HandMotionHistory {
   const Sample& sample(int age) const;  // 0 = newest
   double mean_time_offset() const;      // mean of (t_i - t_newest)
   double time_spread() const;           // sum of (t_i - mean)^2
+  Vec3 linear_slope() const;
+  Vec3 angular_slope() const;
 
   std::vector<Sample> samples_;  // ring buffer
   int next_ = 0;
   int count_ = 0;
+  Vec3 linear_ = Vec3::Zero(), angular_ = Vec3::Zero();  // the slopes of the samples now held
 };
 
 }  // namespace handsim
