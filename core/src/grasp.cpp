@@ -241,6 +241,10 @@ void HandMotionHistory::push(const Pose& palm, double time) {
   samples_[static_cast<size_t>(next_)] = {p, time};
   next_ = (next_ + 1) % window();
   count_ = std::min(count_ + 1, window());
+  refresh_velocities();
+}
+
+void HandMotionHistory::refresh_velocities() {
   linear_ = linear_slope();
   angular_ = angular_slope();
 }

@@ -9,6 +9,7 @@
 #include "pose_fit.h"
 
 #include <array>
+#include <type_traits>
 #include <utility>
 
 #include <vector>
@@ -178,6 +179,8 @@ class HandMotionHistory {
     });
     v.index(h.next_, uint32_t(h.samples_.size()));
     v.index(h.count_, uint32_t(h.samples_.size() + 1));
+    // The velocities are a function of the samples: recomputed when a restore wrote them, never saved.
+    if constexpr (!std::is_const_v<Self>) h.refresh_velocities();
   }
 
  private:
@@ -190,6 +193,7 @@ class HandMotionHistory {
   double time_spread() const;           // sum of (t_i - mean)^2
   Vec3 linear_slope() const;
   Vec3 angular_slope() const;
+  void refresh_velocities();  // linear_, angular_ from the samples held
 
   std::vector<Sample> samples_;  // ring buffer
   int next_ = 0;
