@@ -128,6 +128,9 @@ typedef struct handsim_grasp_settings {
   double closing_distance;  /* m: the hand's grip span shrank this much ... */
   double closing_window_s;  /* s: ... within this time (0 distance: off) */
   double opening_distance;  /* m: grip span opened this much over its tightest while held: let go (0: off) */
+  double squeeze_distance;  /* m: an opposing pair carried this far into the body by the hand's articulation within
+                               closing_window_s begins a grasp (0: off) */
+  double pass_depth;        /* m: contacts deeper than this do not begin a grasp (a pass-through; 0: off) */
   int32_t velocity_window;
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
 } handsim_grasp_settings;

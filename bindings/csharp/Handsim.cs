@@ -181,6 +181,8 @@ namespace Handsim
         public double ClosingDistance;
         public double ClosingWindowS;
         public double OpeningDistance;
+        public double SqueezeDistance;
+        public double PassDepth;
         public int VelocityWindow;
         public int AcrossParts;  // bool
     }

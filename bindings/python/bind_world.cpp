@@ -90,6 +90,8 @@ void bind_defs(py::module_& m) {
       .def_readwrite("closing_distance", &GraspSettings::closing_distance)
       .def_readwrite("closing_window_s", &GraspSettings::closing_window_s)
       .def_readwrite("opening_distance", &GraspSettings::opening_distance)
+      .def_readwrite("squeeze_distance", &GraspSettings::squeeze_distance)
+      .def_readwrite("pass_depth", &GraspSettings::pass_depth)
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
       .def_readwrite("velocity_window", &GraspSettings::velocity_window);

@@ -16,6 +16,13 @@ namespace {
 constexpr double kAngleMargin = 1e-9;
 constexpr double kDotMargin = 1e-12;
 
+// The bone particle p moves with most (its largest skinning weight).
+int main_bone(const HandModel& model, int p) {
+  int k = 0;
+  model.particle_weights.col(p).maxCoeff(&k);
+  return model.particle_bones(k, p);
+}
+
 void check_directions(const std::vector<Vec3>& d) {
   for (size_t i = 0; i < d.size(); ++i) {
     double n2 = d[i].squaredNorm();
@@ -45,6 +52,15 @@ bool cone_excludes(const std::vector<Vec3>& d, const Vec3& axis, double c) {
   for (const Vec3& di : d) cos_alpha = std::min(cos_alpha, di.dot(axis));
   return cos_alpha > 0 && 2 * cos_alpha * cos_alpha - 1 >= c + kDotMargin;
 }
+
+}  // namespace
+
+bool can_squeeze(int a, int b) {
+  auto finger = [](int part) { return part >= kIndexMetacarpal ? (part - kIndexMetacarpal) / 5 : -1; };
+  return a != b && !(finger(a) >= 0 && finger(b) >= 0 && finger(a) != finger(b));
+}
+
+namespace {
 
 // Exact scan. theta_i = angle of d_i to the axis; the angle between d_i and d_j is at most theta_i + theta_j,
 // so d_i . d_j < c needs theta_i + theta_j > acos(c). With the thetas sorted in decreasing order, each row of
@@ -116,6 +132,8 @@ void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) 
   validate::in_range(s.closing_distance, 0, 1, prefix + "closing_distance", "m");
   validate::in_range(s.closing_window_s, 0, 3600, prefix + "closing_window_s", "s");
   validate::in_range(s.opening_distance, 0, 1, prefix + "opening_distance", "m");
+  validate::in_range(s.squeeze_distance, 0, 1, prefix + "squeeze_distance", "m");
+  validate::in_range(s.pass_depth, 0, 1, prefix + "pass_depth", "m");
   validate::in_range(s.release_distance, 0, 1, prefix + "release_distance", "m");
   validate::in_range(s.tracking_grace_s, 0, 3600, prefix + "tracking_grace_s", "s");
   if (s.velocity_window < 2 || s.velocity_window > 1000)
@@ -226,6 +244,71 @@ double GripHistory::approached_by(const GripHistory& other) const {
 }
 
 // ---------------------------------------------------------------------------------------------------------
+// Squeeze: the hand's articulation carrying an opposing pair into the body
+
+void ArticulationHistory::push(const Bones& bones, double time, double window) {
+  validate::finite(time, "time");
+  if (!samples_.empty() && !(time > samples_.back().time))
+    validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(samples_.back().time));
+  samples_.push_back({bones, time});
+  size_t old = 0;
+  while (old + 1 < samples_.size() && samples_[old].time < time - window - 1e-9) ++old;
+  samples_.erase(samples_.begin(), samples_.begin() + std::ptrdiff_t(old));
+}
+
+bool ArticulationHistory::in_time_order() const {
+  for (size_t k = 1; k < samples_.size(); ++k)
+    if (!(samples_[k].time > samples_[k - 1].time)) return false;
+  return true;
+}
+
+namespace {
+// x -> B^-1 x for a rigid B = [R | t].
+Vec3 to_bind(const BoneTransform& b, const Vec3& x) { return b.leftCols<3>().transpose() * (x - b.col(3)); }
+Vec3 to_world(const BoneTransform& b, const Vec3& x) { return b.leftCols<3>() * x + b.col(3); }
+}  // namespace
+
+double ArticulationHistory::inward(const HandModel& model, int particle, const Vec3& position,
+                                   const Vec3& normal) const {
+  if (samples_.size() < 2) return 0.0;
+  const Bones& now = samples_.back().bones;
+  const int bone = main_bone(model, particle);
+  const Vec3 rest = to_bind(now[bone], position);      // the particle in its bone's bind frame
+  const Vec3 in_palm = to_bind(now[kPalm], position);  // ... and in the palm's, now
+  const Vec3 inwards = -(now[kPalm].leftCols<3>().transpose() * normal);  // into the body, palm coordinates
+  double most = 0;
+  for (size_t k = 0; k + 1 < samples_.size(); ++k) {
+    const Bones& then = samples_[k].bones;
+    most = std::max(most, (in_palm - to_bind(then[kPalm], to_world(then[bone], rest))).dot(inwards));
+  }
+  return most;
+}
+
+bool squeezing_pair(const std::vector<Vec3>& directions, const std::vector<int>& parts,
+                    const std::vector<double>& inward, double c, double needed) {
+  validate::finite(c, "c");
+  validate::finite(needed, "needed");
+  check_directions(directions);
+  const size_t n = directions.size();
+  if (inward.size() != n || (!parts.empty() && parts.size() != n))
+    validate::fail("inward", "must have one value per direction (and parts one label each or none), got " +
+                                 std::to_string(inward.size()) + " and " + std::to_string(parts.size()) + " for " +
+                                 std::to_string(n));
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return inward[a] > inward[b]; });
+  for (size_t a = 0; a + 1 < n; ++a) {
+    const size_t i = order[a];
+    if (inward[i] + inward[order[a + 1]] < needed) return false;  // every later pair sums to less
+    for (size_t b = a + 1; b < n && inward[i] + inward[order[b]] >= needed; ++b) {
+      const size_t j = order[b];
+      if ((parts.empty() || can_squeeze(parts[i], parts[j])) && directions[i].dot(directions[j]) < c) return true;
+    }
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------------------
 // HandMotionHistory
 
 HandMotionHistory::HandMotionHistory(int window) {
@@ -314,9 +397,7 @@ BodyVelocity HandMotionHistory::attached_body_velocity(const Vec3& centre_of_mas
 }
 
 int rigid_part(const HandModel& model, int p) {
-  int k = 0;
-  model.particle_weights.col(p).maxCoeff(&k);
-  const int bone = model.particle_bones(k, p);
+  const int bone = main_bone(model, p);
   switch (bone) {
     case kWrist: case kThumbMetacarpal: case kIndexMetacarpal: case kMiddleMetacarpal: case kRingMetacarpal:
     case kLittleMetacarpal:
@@ -341,32 +422,46 @@ Vec3 capped_speed(const Vec3& v) {
 double World::Impl::closing_needed() const { return def.grasp.closing_distance; }
 
 // Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
-// Two rigid parts begin a grasp (GraspSettings::across_parts); any opposing pair keeps it, so a held body's
-// contacts (hundreds on a pinched lid) need no parts. A held body is kept by the existence of one opposing
-// pair, so the pair that kept it last frame is tried first: while thumb and finger still oppose (nearly
-// every frame of a hold), the answer is known after one dot product instead of a pass over every contact,
-// and it is the same answer (the full test is exact). `directions` and `parts` are scratch space.
+// A grasp begins with two rigid parts (GraspSettings::across_parts), counting only contacts within pass_depth and,
+// with squeeze_distance, only a pair the hand's articulation carried into the body; any opposing pair keeps it,
+// so a held body's contacts (hundreds on a pinched lid) need no parts. A held body is kept by the existence of
+// one opposing pair, so the pair that kept it last frame is tried first: while thumb and finger still oppose
+// (nearly every frame of a hold), the answer is known after one dot product instead of a pass over every
+// contact, and it is the same answer (the full test is exact). `directions` and `parts` are scratch space.
 World::Impl::Intent World::Impl::hand_intent(HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
                                              std::vector<int>& parts) const {
-  const double cos = def.grasp.cos_threshold;
-  const bool across = def.grasp.across_parts && !pair.tracker.grasped();
+  const GraspSettings& g = def.grasp;
+  const HandSlot& h = hands[hi];
+  const bool begin = !pair.tracker.grasped();
+  const bool across = g.across_parts && begin;
+  const bool every_contact = !begin || (g.pass_depth <= 0 && g.squeeze_distance <= 0);  // no begin-only filter
   Intent out;
-  out.closing = hands[hi].grip.closed_by() >= closing_needed();
-  if (!across && witness_opposes(pair, cos)) {
+  out.closing = h.grip.closed_by() >= closing_needed();
+  if (!across && every_contact && witness_opposes(pair, g.cos_threshold)) {
     out.opposing = true;
     return out;
   }
+  auto counts = [&](const ParticleContact& c) { return !begin || g.pass_depth <= 0 || c.depth <= g.pass_depth; };
   directions.clear();
   parts.clear();
   for (const ParticleContact& c : pair.contacts) {
+    if (!counts(c)) continue;  // a pass-through, not a grip
     directions.push_back(c.normal);
-    if (across) parts.push_back(rigid_part(*hands[hi].model, c.particle));
+    if (across) parts.push_back(rigid_part(*h.model, c.particle));
   }
   OpposingPair found{0, 0};
-  out.opposing = pair.contacts.size() >= 2 && (across ? opposing_across_parts(directions, parts, cos)
-                                                      : opposing_contacts(directions, cos, &found));
+  out.opposing = directions.size() >= 2 && (across ? opposing_across_parts(directions, parts, g.cos_threshold)
+                                                   : opposing_contacts(directions, g.cos_threshold, &found));
   pair.witness = {-1, -1};
-  if (out.opposing && !across) pair.witness = {pair.contacts[found.first].particle, pair.contacts[found.second].particle};
+  if (out.opposing && !across && every_contact)  // found indexes directions, here one per contact
+    pair.witness = {pair.contacts[found.first].particle, pair.contacts[found.second].particle};
+  if (out.opposing && begin && g.squeeze_distance > 0) {  // only when eq. 3 holds: it looks back over the window
+    std::vector<double> inward;
+    for (const ParticleContact& c : pair.contacts)
+      if (counts(c))
+        inward.push_back(h.articulation.inward(*h.model, c.particle, h.state.tracked_positions.col(c.particle), c.normal));
+    out.opposing = squeezing_pair(directions, parts, inward, g.cos_threshold, g.squeeze_distance);
+  }
   return out;
 }
 

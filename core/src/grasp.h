@@ -25,6 +25,13 @@ namespace handsim {
 using OpposingPair = std::pair<size_t, size_t>;
 bool opposing_contacts(const std::vector<Vec3>& directions, double c = kOpposingCos, OpposingPair* pair = nullptr);
 
+// Whether two rigid parts (rigid_part's labels: kPalm or a phalanx's joint) can squeeze a body between them
+// (squeezing_pair): not one part (it cannot squeeze), and not the phalanges of two different fingers: the index to little fingers flex
+// in parallel, so they press the same way and cannot clamp a body between them (fingertips of an open hand lying
+// on two faces of a lid's edge are no grip). The thumb opposes the palm and every finger; one finger's phalanges
+// oppose each other when it hooks round an edge.
+bool can_squeeze(int a, int b);
+
 // opposing_contacts restricted to pairs whose parts differ (parts[i] labels directions[i], same length).
 // Checks the unrestricted test first (O(n) in the common cases), then the pruned pair scan, skipping pairs of one part.
 bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vector<int>& parts,
@@ -108,6 +115,47 @@ int rigid_part(const HandModel& model, int particle);
 // to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
 // pinch shortens it; moving or turning the hand as a whole does not change it.
 double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones);
+
+// A hand's bone transforms (skinning's B_j) over the last `window` seconds, for GraspSettings::squeeze_distance:
+// how the hand's own articulation (flexing, opposing the thumb; not moving or turning the whole hand) moved its
+// particles.
+class ArticulationHistory {
+ public:
+  using Bones = std::array<BoneTransform, kHandJointCount>;
+  // Times must increase (throws handsim::Error); samples older than the window before the newest are dropped.
+  void push(const Bones& bones, double time, double window);
+  void clear() { samples_.clear(); }
+  // How far the articulation carried `particle` (now at `position`, on a contact with outward normal `normal`)
+  // inwards through that face: the largest over the window of (y_now - y_then) . (-normal), with y the particle in
+  // palm coordinates (its own bone's motion relative to the palm bone), turned into the world by the current palm.
+  // 0 with fewer than two samples; a palm particle gives 0.
+  double inward(const HandModel& model, int particle, const Vec3& position, const Vec3& normal) const;
+
+  bool in_time_order() const;  // strictly increasing times, as push keeps them (a restored state is checked)
+
+  template <class Visitor, class Self>
+  static void visit_state(Self& a, Visitor& v) {
+    v.list(a.samples_, [&v](auto& s) {
+      for (auto& bone : s.bones) v.state(bone);
+      v.state(s.time);
+    });
+  }
+
+ private:
+  struct Sample {
+    Bones bones;
+    double time = 0;
+  };
+  std::vector<Sample> samples_;  // oldest first
+};
+
+// Eq. 3 for a squeeze: some pair i != j with d_i . d_j < c, can_squeeze(parts[i], parts[j]) (all pairs when `parts`
+// is empty)
+// and inward[i] + inward[j] >= needed (ArticulationHistory::inward of each contact). Same lengths, unit directions;
+// throws handsim::Error otherwise. Scans pairs in decreasing order of inward motion, stopping at the first sum
+// below `needed`.
+bool squeezing_pair(const std::vector<Vec3>& directions, const std::vector<int>& parts,
+                    const std::vector<double>& inward, double c, double needed);
 
 // A hand's grip span and palm position over the last `window` seconds, for GraspSettings::closing_distance.
 class GripHistory {

@@ -344,6 +344,7 @@ StageReport World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
       h.state.tracked = false;
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
       h.grip.clear();     // nor have closed on what it finds there
+      h.articulation.clear();
       continue;
     }
     // The frame was validated by validate_step: pose the bones, then skin the particles only when the hand's
@@ -376,6 +377,7 @@ StageReport World::Impl::pose_hands(const std::vector<HandFrame>& frames, double
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
     h.grip.push(grip_span(*h.model, h.state.bones), h.palm.position, time + dt, def.grasp.closing_window_s);
+    if (def.grasp.squeeze_distance > 0) h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
     if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;

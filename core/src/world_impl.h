@@ -100,6 +100,7 @@ struct HandSlot {
   HandState state;
   HandMotionHistory history;
   GripHistory grip;  // grip span and palm over the last closing_window_s (GraspSettings::closing_distance)
+  ArticulationHistory articulation;  // bones over the last closing_window_s (GraspSettings::squeeze_distance)
   Pose palm;
   bool has_pose = false;  // a tracked frame has been seen
   Eigen::Matrix3Xd render;

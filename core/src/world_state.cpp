@@ -315,6 +315,10 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
     for (auto& bone : h.state.bones) v.state(bone);
     std::remove_const_t<std::remove_reference_t<decltype(h.history)>>::visit_state(h.history, v);
     std::remove_const_t<std::remove_reference_t<decltype(h.grip)>>::visit_state(h.grip, v);
+    // Kept only with the squeeze rule on (GraspSettings::squeeze_distance), so a world without it saves and hashes
+    // as before.
+    if (w.def.grasp.squeeze_distance > 0)
+      std::remove_const_t<std::remove_reference_t<decltype(h.articulation)>>::visit_state(h.articulation, v);
     // Particles: skinned from the bones (lazily), deformed from the contacts of the frame. Caches.
     v.points(h.state.tracked_positions, particles);
     v.points(h.state.deformed_positions, particles);
@@ -447,7 +451,8 @@ std::string World::Impl::inconsistency() const {
     const size_t groups = h.model->particle_skin.groups.size();
     if (h.state.displaced.size() != h.displaced_centres.size()) return hand + " has displaced particles without centres";
     if (!h.group_bounds.empty() && h.group_bounds.size() != 6 * groups) return hand + " has group boxes of another hand";
-    if (!h.history.in_time_order() || !h.grip.in_time_order()) return hand + " has a history out of time order";
+    if (!h.history.in_time_order() || !h.grip.in_time_order() || !h.articulation.in_time_order())
+      return hand + " has a history out of time order";
   }
   return {};
 }

@@ -1,4 +1,5 @@
 #include "grasp.h"
+#include "skinning.h"
 
 #include <gtest/gtest.h>
 
@@ -64,6 +65,98 @@ TEST(OpposingContacts, AcrossPartsNeedsTwoParts) {
   EXPECT_TRUE(opposing_across_parts(d, {0, 4, 4}));
   EXPECT_FALSE(opposing_across_parts({Vec3::UnitY(), Vec3::UnitY()}, {0, 4}));
   EXPECT_THROW(opposing_across_parts(d, {0, 4}), Error);
+}
+
+// squeezing_pair: two different fingers never squeeze (they flex in parallel); the thumb and the palm oppose every finger, and one
+// finger's phalanges oppose each other (a finger hooked round an edge).
+TEST(OpposingContacts, DifferentFingersDoNotSqueeze) {
+  EXPECT_FALSE(can_squeeze(kIndexDistal, kMiddleDistal));
+  EXPECT_FALSE(can_squeeze(kRingIntermediate, kLittleProximal));
+  EXPECT_FALSE(can_squeeze(kPalm, kPalm));
+  EXPECT_TRUE(can_squeeze(kIndexIntermediate, kIndexDistal));
+  EXPECT_TRUE(can_squeeze(kThumbDistal, kLittleDistal));
+  EXPECT_TRUE(can_squeeze(kPalm, kMiddleDistal));
+  EXPECT_TRUE(can_squeeze(kPalm, kThumbProximal));
+  const std::vector<Vec3> d = {Vec3::UnitX(), -Vec3::UnitX()};
+  EXPECT_TRUE(opposing_across_parts(d, {kIndexDistal, kRingDistal}));  // eq. 3 across parts: two parts suffice
+  EXPECT_FALSE(squeezing_pair(d, {kIndexDistal, kRingDistal}, {0.01, 0.01}, kOpposingCos, 0.01));
+  EXPECT_TRUE(squeezing_pair(d, {kIndexDistal, kThumbDistal}, {0.01, 0.01}, kOpposingCos, 0.01));
+  EXPECT_TRUE(squeezing_pair(d, {kIndexDistal, kIndexProximal}, {0.01, 0.01}, kOpposingCos, 0.01));
+}
+
+// squeezing_pair: an opposing pair of two parts whose inward motions sum to at least `needed`.
+TEST(OpposingContacts, SqueezingPairNeedsInwardMotionOfAnOpposingPair) {
+  const std::vector<Vec3> d = {Vec3::UnitX(), -Vec3::UnitX(), Vec3::UnitY()};
+  const std::vector<int> parts = {kThumbDistal, kIndexDistal, kMiddleDistal};
+  EXPECT_TRUE(squeezing_pair(d, parts, {0.006, 0.005, 0.0}, kOpposingCos, 0.01));
+  EXPECT_FALSE(squeezing_pair(d, parts, {0.006, 0.003, 0.0}, kOpposingCos, 0.01));
+  EXPECT_TRUE(squeezing_pair(d, parts, {0.02, 0.0, 0.0}, kOpposingCos, 0.01));  // one side may do all the moving
+  EXPECT_FALSE(squeezing_pair(d, parts, {0.004, 0.0, 0.02}, kOpposingCos, 0.01));  // the pair that moved does not oppose
+  EXPECT_FALSE(squeezing_pair(d, {kThumbDistal, kThumbDistal, kMiddleDistal}, {0.006, 0.005, 0.0}, kOpposingCos, 0.01));
+  EXPECT_TRUE(squeezing_pair(d, {}, {0.006, 0.005, 0.0}, kOpposingCos, 0.01));  // no parts: any pair
+  EXPECT_THROW(squeezing_pair(d, parts, {0.1, 0.1}, kOpposingCos, 0.01), Error);
+  EXPECT_THROW(squeezing_pair(d, {1, 2}, {0.1, 0.1, 0.1}, kOpposingCos, 0.01), Error);
+  EXPECT_THROW(squeezing_pair(d, parts, {0.1, 0.1, 0.1}, kOpposingCos, NAN), Error);
+}
+
+// ArticulationHistory::inward: a curling index fingertip moved inwards by about how far it moved relative to the palm;
+// the same hand moved and turned as a whole, or a palm particle, moved by nothing.
+TEST(ArticulationHistory, CountsOnlyTheHandsOwnMotion) {
+  const HandModel model = build_hand_model(HandDef{});
+  int tip = -1;  // a particle riding the index's distal bone
+  for (int p = 0; p < model.particle_count() && tip < 0; ++p) {
+    int k = 0;
+    model.particle_weights.col(p).maxCoeff(&k);
+    if (model.particle_bones(k, p) == kIndexDistal) tip = p;
+  }
+  ASSERT_GE(tip, 0);
+  const int palm = [&] {
+    for (int p = 0; p < model.particle_count(); ++p)
+      if (rigid_part(model, p) == kPalm) return p;
+    return -1;
+  }();
+  ASSERT_GE(palm, 0);
+  auto frame = [&](double curl, const Pose& at) {
+    HandPoseParams params;
+    params.curl = {0, curl, 0, 0, 0};
+    return make_hand_frame(Handedness::Right, at, params);
+  };
+  // Curling with the palm still: the tip moved by `moved`; a face whose inward direction is that motion gets it all.
+  Vec3 moved;
+  {
+    ArticulationHistory history;
+    HandState state;
+    for (int i = 0; i <= 10; ++i) {
+      pose_hand(model, frame(0.06 * i, Pose{}), state);
+      history.push(state.bones, 0.03 * i, 0.5);
+    }
+    const Vec3 x = state.tracked_positions.col(tip);
+    pose_hand(model, frame(0.0, Pose{}), state);
+    moved = x - Vec3(state.tracked_positions.col(tip));
+    ASSERT_GT(moved.norm(), 0.02);
+    // The particle is taken to ride its main bone (skinning blends up to four): within 5 % of its skinned motion.
+    EXPECT_NEAR(history.inward(model, tip, x, -moved.normalized()), moved.norm(), 0.05 * moved.norm());
+    EXPECT_EQ(history.inward(model, tip, x, moved.normalized()), 0.0);  // moving out of that face: nothing
+  }
+  // The open hand moved 10 cm and turned 60 degrees as a whole: nothing, whatever the face.
+  const Pose far{Vec3(0.1, -0.05, 0.02), Quat(Eigen::AngleAxisd(1.0, Vec3(0.3, 1, 0).normalized()))};
+  for (const Vec3& n : {Vec3(Vec3::UnitX()), Vec3(Vec3::UnitY()), Vec3(Vec3::UnitZ()), Vec3(Vec3(-1, -1, -1).normalized())}) {
+    ArticulationHistory history;
+    HandState state;
+    for (int i = 0; i <= 10; ++i) {
+      const double s = i / 10.0;
+      pose_hand(model, frame(0.3, Pose{s * far.position, Quat::Identity().slerp(s, far.orientation)}), state);
+      history.push(state.bones, 0.03 * i, 0.5);
+    }
+    EXPECT_NEAR(history.inward(model, tip, state.tracked_positions.col(tip), n), 0.0, 1e-9);
+    EXPECT_NEAR(history.inward(model, palm, state.tracked_positions.col(palm), n), 0.0, 1e-9);
+  }
+  ArticulationHistory history;
+  EXPECT_EQ(history.inward(model, tip, Vec3::Zero(), Vec3::UnitX()), 0.0);  // no samples
+  HandState state;
+  pose_hand(model, frame(0, Pose{}), state);
+  history.push(state.bones, 1.0, 0.5);
+  EXPECT_THROW(history.push(state.bones, 1.0, 0.5), Error);  // time must increase
 }
 
 TEST(OpposingContacts, FewerThanTwoOrIdenticalNeverOppose) {

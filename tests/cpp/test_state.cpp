@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <tuple>
 
@@ -315,4 +316,30 @@ TEST(State, ForgedBytesAreRefusedOrStepCleanly) {
   }
   std::printf("forged states: %d refused, %d restored and stepped\n", refused, restored);
   EXPECT_GT(refused, 0);
+}
+
+// With GraspSettings::squeeze_distance on, the hand's articulation history decides when a grasp may begin, so it
+// is saved: a world restored from one whose hand curled differently has the saver's state, also a frame later.
+TEST(State, SqueezeHistoryIsSavedAndRestored) {
+  auto hand_after = [](double squeeze, double first_curl) {
+    WorldDef def;
+    def.grasp.squeeze_distance = squeeze;
+    auto w = std::make_unique<World>(def);
+    w->add_hand(HandDef{});
+    for (int i = 0; i < 10; ++i) {
+      HandPoseParams p;
+      p.curl = {0, i < 5 ? first_curl : 0.5, 0, 0, 0};
+      w->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
+    }
+    return w;
+  };
+  auto a = hand_after(0.01, 0.0);
+  auto b = hand_after(0.01, 0.3);
+  b->restore_state(a->save_state());
+  EXPECT_EQ(a->state_hash(), b->state_hash());
+  HandPoseParams p;
+  p.curl = {0, 0.6, 0, 0, 0};
+  a->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
+  b->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
+  EXPECT_EQ(a->state_hash(), b->state_hash());
 }

@@ -198,6 +198,47 @@ TEST(Step, PinchGraspsTheCube) {
   EXPECT_LT((s.world.body_pose(s.box).position - s.rest.position).norm(), 0.002);
 }
 
+// GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
+// it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
+// gives the same opposing contacts and is not grasped, though the default rule grasps it.
+// GraspSettings::pass_depth: contacts deeper than it do not begin a grasp (0.1 mm: hardly any contact counts).
+TEST(Step, SqueezeDistanceNeedsTheHandToCloseOnTheBody) {
+  WorldDef squeeze;
+  squeeze.grasp.squeeze_distance = 0.01;
+  auto closed_approach = [](Scene& s) {
+    s.world.set_body_pose(s.box, translation(Vec3(0.5, 0, 0)) * s.rest);
+    for (int i = 0; i < 40; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+    s.world.set_body_pose(s.box, s.rest);
+    for (int i = 0; i < 30; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+    return count(s.log, EventType::GraspBegin);
+  };
+  {
+    Scene s(squeeze);
+    s.grasp();
+    EXPECT_EQ(count(s.log, EventType::GraspBegin), 1);
+  }
+  {
+    Scene s(squeeze);
+    EXPECT_EQ(closed_approach(s), 0);
+    EXPECT_GT(s.world.body_contact_count(s.box, s.hand), 0);
+  }
+  {
+    Scene s;
+    EXPECT_EQ(closed_approach(s), 1);  // the default rule: opposing contacts suffice
+  }
+  {
+    WorldDef shallow = squeeze;
+    shallow.grasp.pass_depth = 1e-4;
+    Scene s(shallow);
+    s.grasp();
+    EXPECT_EQ(count(s.log, EventType::GraspBegin), 0);
+    shallow.grasp.pass_depth = 0.01;
+    Scene deep(shallow);
+    deep.grasp();
+    EXPECT_EQ(count(deep.log, EventType::GraspBegin), 1);
+  }
+}
+
 // Lift 30 cm and turn 90 degrees about the vertical over 1 s: the cube is palm * T_rel every frame, to 1e-9.
 // Opening the thumb releases it (Released), it becomes dynamic and falls back to the ground.
 TEST(Step, PinchLiftTurnAndRelease) {

@@ -19,6 +19,8 @@
   X(GraspSettings, closing_distance)                                                                  \
   X(GraspSettings, closing_window_s)                                                                  \
   X(GraspSettings, opening_distance)                                                                  \
+  X(GraspSettings, squeeze_distance)                                                                  \
+  X(GraspSettings, pass_depth)                                                                        \
   X(GraspSettings, release_distance)                                                                  \
   X(GraspSettings, tracking_grace_s)                                                                  \
   X(GraspSettings, velocity_window)

@@ -46,6 +46,20 @@ struct GraspSettings {
   double closing_distance = 0;
   // 0.5 s: a reach-and-grasp closes the hand within a few tenths of a second.
   double closing_window_s = 0.5;
+  // A grasp begins only while the hand squeezes the body (docs/grasp.md, "Squeeze"): an opposing pair of its
+  // contacts (two parts, as across_parts) was carried inwards through their faces by the hand's own articulation
+  // -- fingers flexing, the thumb opposing; motion relative to the palm, so moving or turning the whole hand counts
+  // nothing -- by at least squeeze_distance together within closing_window_s. An open hand whose skin happens to
+  // lie on two sides of a thin lid, or of a box it plunges into, is not squeezing it; the grip span
+  // (closing_distance) also shrinks when fingers that touch nothing flex. Value to use: 1 cm, three times the few
+  // mm a tracker's joint jitters, summed over two contacts, and a third of the ~3 cm the thumb-index gap of a pinch
+  // travels. 0: off.
+  double squeeze_distance = 0;
+  // Contacts deeper than this are a pass-through, not a grip: they do not count towards beginning a grasp (they
+  // still push and hold). A hand closing on a body begins at its surface; skin 2-3 cm inside a body (a hand
+  // plunged through a 1.5 cm lid or into a box) is not pressing on it. Value to use: 1 cm, the few mm finger pulp
+  // compresses plus the ~6 mm a finger closing at 20 cm/s travels during grasp_time_s. 0: off.
+  double pass_depth = 0;
   // A held body is let go once the hand opens: its grip span has grown by more than opening_distance over the
   // tightest it was since the grasp began, whatever skin still touches it (an open hand with a cube in its
   // palm, its skin draped over opposite faces, held it on). Value to use: 2.5 cm, each of the five measured
