@@ -208,20 +208,10 @@ double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJo
 void GripHistory::push(double span, const Vec3& palm, double time, double window) {
   validate::finite(span, "span");
   validate::finite(palm, "palm");
-  validate::finite(time, "time");
-  if (!samples_.empty() && !(time > samples_.back().time))
-    validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(samples_.back().time));
-  samples_.push_back({span, palm, time});
-  size_t old = 0;
-  while (old + 1 < samples_.size() && samples_[old].time < time - window - 1e-9) ++old;
-  samples_.erase(samples_.begin(), samples_.begin() + std::ptrdiff_t(old));
+  push_windowed(samples_, Sample{span, palm, time}, window);
 }
 
-bool GripHistory::in_time_order() const {
-  for (size_t i = 1; i < samples_.size(); ++i)
-    if (!(samples_[i].time > samples_[i - 1].time)) return false;
-  return true;
-}
+bool GripHistory::in_time_order() const { return times_increase(samples_); }
 
 double GripHistory::closed_by() const {
   double widest = 0;
@@ -247,20 +237,10 @@ double GripHistory::approached_by(const GripHistory& other) const {
 // Squeeze: the hand's articulation carrying an opposing pair into the body
 
 void ArticulationHistory::push(const Bones& bones, double time, double window) {
-  validate::finite(time, "time");
-  if (!samples_.empty() && !(time > samples_.back().time))
-    validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(samples_.back().time));
-  samples_.push_back({bones, time});
-  size_t old = 0;
-  while (old + 1 < samples_.size() && samples_[old].time < time - window - 1e-9) ++old;
-  samples_.erase(samples_.begin(), samples_.begin() + std::ptrdiff_t(old));
+  push_windowed(samples_, Sample{bones, time}, window);
 }
 
-bool ArticulationHistory::in_time_order() const {
-  for (size_t k = 1; k < samples_.size(); ++k)
-    if (!(samples_[k].time > samples_[k - 1].time)) return false;
-  return true;
-}
+bool ArticulationHistory::in_time_order() const { return times_increase(samples_); }
 
 namespace {
 // x -> B^-1 x for a rigid B = [R | t].

@@ -7,6 +7,7 @@
 #include "handsim/types.h"
 #include "handsim/hand.h"
 #include "pose_fit.h"
+#include "validate.h"
 
 #include <array>
 #include <type_traits>
@@ -115,6 +116,29 @@ int rigid_part(const HandModel& model, int particle);
 // to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
 // pinch shortens it; moving or turning the hand as a whole does not change it.
 double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones);
+
+// Samples with a .time, oldest first, kept for the last `window` seconds (the newest is always kept): the grip and
+// articulation histories share this. Throws handsim::Error naming "time" unless times strictly increase.
+template <class Sample>
+void push_windowed(std::vector<Sample>& samples, Sample sample, double window) {
+  validate::finite(sample.time, "time");
+  if (!samples.empty() && !(sample.time > samples.back().time))
+    validate::fail("time", "must increase, got " + validate::fmt(sample.time) + " after " +
+                               validate::fmt(samples.back().time));
+  const double time = sample.time;
+  samples.push_back(std::move(sample));
+  size_t old = 0;
+  while (old + 1 < samples.size() && samples[old].time < time - window - 1e-9) ++old;
+  samples.erase(samples.begin(), samples.begin() + std::ptrdiff_t(old));
+}
+
+// Strictly increasing times, as push_windowed keeps them (a restored state is checked).
+template <class Sample>
+bool times_increase(const std::vector<Sample>& samples) {
+  for (size_t k = 1; k < samples.size(); ++k)
+    if (!(samples[k].time > samples[k - 1].time)) return false;
+  return true;
+}
 
 // A hand's bone transforms (skinning's B_j) over the last `window` seconds, for GraspSettings::squeeze_distance:
 // how the hand's own articulation (flexing, opposing the thumb; not moving or turning the whole hand) moved its
