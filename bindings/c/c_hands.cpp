@@ -191,6 +191,22 @@ HANDSIM_API int HANDSIM_CALL handsim_lid_pinch_shape(handsim_hand_pose_params* o
   return guarded([&] { deref(out_params, "out_params") = as_c<handsim_hand_pose_params>(lid_pinch_shape()); });
 }
 
+HANDSIM_API int HANDSIM_CALL handsim_open_grip(const handsim_hand_pose_params* grip, double openness,
+                                               handsim_hand_pose_params* out_params) {
+  return guarded([&] {
+    const HandPoseParams g = from_c<HandPoseParams>(deref(grip, "grip"));
+    deref(out_params, "out_params") = as_c<handsim_hand_pose_params>(open_grip(g, openness));
+  });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_closing_grip(const handsim_hand_pose_params* grip, double t, double duration,
+                                                  handsim_hand_pose_params* out_params) {
+  return guarded([&] {
+    const HandPoseParams g = from_c<HandPoseParams>(deref(grip, "grip"));
+    deref(out_params, "out_params") = as_c<handsim_hand_pose_params>(closing_grip(g, t, duration));
+  });
+}
+
 HANDSIM_API int HANDSIM_CALL handsim_build_jewelry_box(handsim_world* world, const handsim_jewelry_box_def* jewelry_box,
                                                        handsim_jewelry_box* out_box) {
   return guarded([&] {

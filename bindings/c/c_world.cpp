@@ -19,6 +19,14 @@ HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settin
   return guarded([&] { deref(out_settings, "out_settings") = as_c<handsim_world_settings>(WorldDef{}); });
 }
 
+HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_contacts(handsim_grasp_settings* out_settings) {
+  return guarded([&] { deref(out_settings, "out_settings") = as_c<handsim_grasp_settings>(GraspSettings::contacts()); });
+}
+
+HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_paper(handsim_grasp_settings* out_settings) {
+  return guarded([&] { deref(out_settings, "out_settings") = as_c<handsim_grasp_settings>(GraspSettings::paper()); });
+}
+
 HANDSIM_API int HANDSIM_CALL handsim_world_create(const handsim_world_settings* settings, handsim_world** out_world) {
   return guarded([&] {
     handsim_world*& out = deref(out_world, "out_world");

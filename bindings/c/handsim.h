@@ -36,9 +36,11 @@
  * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value).
  * 2.1: save and restore (handsim_save_state, handsim_restore_state).
  * 2.2: the typed step report (handsim_step_report, handsim_last_step, HANDSIM_STAGE_*, HANDSIM_SKIP_*,
- * HANDSIM_WARNING_*). */
+ * HANDSIM_WARNING_*).
+ * 2.3: hands that close onto what they grasp (handsim_open_grip, handsim_closing_grip) and the grasp rules to
+ * compare with (handsim_grasp_settings_contacts, handsim_grasp_settings_paper). */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 2
+#define HANDSIM_ABI_VERSION_MINOR 3
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -431,6 +433,12 @@ HANDSIM_API int HANDSIM_CALL handsim_enum_value(int32_t index, handsim_enum_entr
 
 /* Defaults, identical to the C++ defaults. */
 HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settings* out_settings);
+/* Grasp rules for comparison (put one in handsim_world_settings.grasp; docs/grasp.md): the rule before the hand's
+ * intent was read (GraspSettings::contacts(): eq. 3 with its hysteresis, closing_distance and opening_distance 0,
+ * every other field the default), and eq. 3 as printed in the paper (GraspSettings::paper(): that with cos_threshold
+ * +0.7, across_parts 0, grasp_time_s and release_time_s 0). */
+HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_contacts(handsim_grasp_settings* out_settings);
+HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_paper(handsim_grasp_settings* out_settings);
 HANDSIM_API int HANDSIM_CALL handsim_body_def_default(handsim_body_def* out_def);
 HANDSIM_API int HANDSIM_CALL handsim_hinge_def_default(handsim_hinge_def* out_def);
 HANDSIM_API int HANDSIM_CALL handsim_slider_def_default(handsim_slider_def* out_def);
@@ -585,6 +593,16 @@ HANDSIM_API int HANDSIM_CALL handsim_bind_frame(int32_t handedness, double scale
                                                 int32_t capacity);
 /* The hand shape handsim_jewelry_box_lid_pinch_palm is made for. */
 HANDSIM_API int HANDSIM_CALL handsim_lid_pinch_shape(handsim_hand_pose_params* out_params);
+/* People reach with the hand open and close it onto what they grasp (the default grasp rule begins a grasp only
+ * while the hand closes; docs/grasp.md). `grip` opened by `openness`: 0 the grip itself, 1 the open hand (every
+ * curl and the thumb's opposition 0; spread and scale kept), each parameter linearly in between. */
+HANDSIM_API int HANDSIM_CALL handsim_open_grip(const handsim_hand_pose_params* grip, double openness,
+                                               handsim_hand_pose_params* out_params);
+/* The grip `t` s after the hand began to close it over `duration` s (> 0; the synthetic scenes use 0.25 s, a
+ * reach closing its aperture over its last quarter second), minimum jerk: open for t <= 0, the grip from
+ * t >= duration. */
+HANDSIM_API int HANDSIM_CALL handsim_closing_grip(const handsim_hand_pose_params* grip, double t, double duration,
+                                                  handsim_hand_pose_params* out_params);
 /* Adds the table (optional), base, lid and hinge (jewelry_box NULL: the defaults). */
 HANDSIM_API int HANDSIM_CALL handsim_build_jewelry_box(handsim_world* world, const handsim_jewelry_box_def* jewelry_box,
                                                        handsim_jewelry_box* out_box);

@@ -185,6 +185,19 @@ namespace Handsim
         public double PassDepth;
         public int VelocityWindow;
         public int AcrossParts;  // bool
+
+        /// <summary>The grasp rule before the hand's intent was read, for comparison (handsim_grasp_settings_contacts):
+        /// ClosingDistance and OpeningDistance 0, every other field the default.</summary>
+        public static GraspSettings Contacts
+        {
+            get { GraspSettings s; Native.Check(Native.handsim_grasp_settings_contacts(out s), "handsim_grasp_settings_contacts"); return s; }
+        }
+        /// <summary>Eq. 3 as printed in the paper, for comparison (handsim_grasp_settings_paper): Contacts with
+        /// CosThreshold +0.7, AcrossParts 0, GraspTimeS and ReleaseTimeS 0.</summary>
+        public static GraspSettings Paper
+        {
+            get { GraspSettings s; Native.Check(Native.handsim_grasp_settings_paper(out s), "handsim_grasp_settings_paper"); return s; }
+        }
     }
 
     [StructLayout(LayoutKind.Sequential)]
@@ -457,6 +470,17 @@ namespace Handsim
         {
             get { HandPoseParams p; Native.Check(Native.handsim_lid_pinch_shape(out p), "handsim_lid_pinch_shape"); return p; }
         }
+        /// <summary>This grip opened by `openness`: 0 the grip, 1 the open hand (curls and thumb opposition 0).</summary>
+        public HandPoseParams Opened(double openness)
+        {
+            HandPoseParams p; Native.Check(Native.handsim_open_grip(ref this, openness, out p), "handsim_open_grip"); return p;
+        }
+        /// <summary>This grip `t` s after the hand began to close it over `duration` s (minimum jerk; open for
+        /// t &lt;= 0). People reach open and close onto what they grasp; the default grasp rule needs it.</summary>
+        public HandPoseParams Closing(double t, double duration = 0.25)
+        {
+            HandPoseParams p; Native.Check(Native.handsim_closing_grip(ref this, t, duration, out p), "handsim_closing_grip"); return p;
+        }
     }
 
     [StructLayout(LayoutKind.Sequential)]
@@ -616,6 +640,8 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_enum_count(out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_enum_value(int index, out EnumEntry entry);
 
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_grasp_settings_contacts(out GraspSettings s);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_grasp_settings_paper(out GraspSettings s);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_world_settings_default(out WorldSettings s);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_body_def_default(out BodyDef d);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_hinge_def_default(out HingeDef d);
@@ -678,6 +704,8 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_make_hand_frame(HandSide handedness, ref Pose palm, ref HandPoseParams p, [Out] JointPose[] joints, int capacity);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_bind_frame(HandSide handedness, double scale, [Out] JointPose[] joints, int capacity);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_lid_pinch_shape(out HandPoseParams p);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_open_grip(ref HandPoseParams grip, double openness, out HandPoseParams p);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_closing_grip(ref HandPoseParams grip, double t, double duration, out HandPoseParams p);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_build_jewelry_box(WorldHandle world, ref JewelryBoxDef def, out JewelryBox box);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_jewelry_box_lid_pinch_palm(WorldHandle world, ref JewelryBox box, HandSide handedness, double angle, double lift, out Pose palm);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_jewelry_box_points(WorldHandle world, ref JewelryBox box, out Vec3 lidFront, out Vec3 hingePivot, out Vec3 hingeAxis);

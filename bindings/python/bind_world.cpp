@@ -94,7 +94,13 @@ void bind_defs(py::module_& m) {
       .def_readwrite("pass_depth", &GraspSettings::pass_depth)
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
-      .def_readwrite("velocity_window", &GraspSettings::velocity_window);
+      .def_readwrite("velocity_window", &GraspSettings::velocity_window)
+      .def_static("contacts", &GraspSettings::contacts,
+                  "The grasp rule before the hand's intent was read, for comparison (docs/grasp.md): eq. 3 with its "
+                  "hysteresis, closing_distance and opening_distance 0, every other field the default.")
+      .def_static("paper", &GraspSettings::paper,
+                  "Eq. 3 as printed in the paper, for comparison: contacts() with cos_threshold PAPER_LITERAL_COS, "
+                  "any two contacts (across_parts False), grasp and release on the first frame.");
   flag_property(gs, "across_parts", &GraspSettings::across_parts, "GraspSettings.across_parts",
                 "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)");
   bind_enum<ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.");

@@ -122,6 +122,22 @@ bool opposing_across_parts(const std::vector<Vec3>& directions, const std::vecto
   return scan_pairs(directions, mean_axis(directions), c, &parts);
 }
 
+GraspSettings GraspSettings::contacts() {
+  GraspSettings s;
+  s.closing_distance = 0;
+  s.opening_distance = 0;
+  return s;
+}
+
+GraspSettings GraspSettings::paper() {
+  GraspSettings s = contacts();
+  s.cos_threshold = kPaperLiteralCos;
+  s.across_parts = false;
+  s.grasp_time_s = 0;
+  s.release_time_s = 0;
+  return s;
+}
+
 void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) {
   // A cosine: beyond +-1 every threshold means "never" resp. "any two parts" (opposing_contacts), so +-2
   // keeps both settings and rejects only nonsense such as 1e308.

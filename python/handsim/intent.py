@@ -53,7 +53,7 @@ Checks (per recording, per hand):
   placed at the same point. Pass: every closure (times from the tracker) is grasped at every rate or at none,
   and the largest lid angle differs by at most 2 deg across rates.
 
-The grasp settings judged are selectable (``--rule default``, ``--rule paper``, or
+The grasp settings judged are selectable (``--rule default``, ``--rule contacts``, ``--rule paper``, or
 ``--rule NAME:field=value,...`` of :class:`handsim.GraspSettings`); several rules are judged side by side.
 ``--out DIR`` writes one picture per rule and failure kind, ``--doc FILE`` the table into a Markdown file
 between ``<!-- intent begin -->`` and ``<!-- intent end -->``; nothing is written without them.
@@ -670,22 +670,20 @@ def judge_rates(track: Track, particles: Particles, settings, hand_defs, rates=R
 # --- rules, recordings, report ----------------------------------------------------------------------------
 
 def parse_rule(spec: str) -> Tuple[str, object]:
-    """(name, GraspSettings) of a rule: "default", "paper" (eq. 3 as printed: c = +0.7, any two contacts,
-    grasp and release on the first frame), or "NAME:field=value,..." (GraspSettings fields over the default)."""
+    """(name, GraspSettings) of a rule: "default", "contacts" (GraspSettings.contacts(): the rule before the hand's
+    intent was read), "paper" (GraspSettings.paper(): eq. 3 as printed, c = +0.7, any two contacts, grasp and
+    release on the first frame), or "NAME:field=value,..." (GraspSettings fields over the default)."""
+    expected = "expected 'default', 'contacts', 'paper' or 'NAME:field=value,...'"
     if not isinstance(spec, str) or not spec:
-        raise ValueError(f"rule: expected 'default', 'paper' or 'NAME:field=value,...', got {spec!r}")
+        raise ValueError(f"rule: {expected}, got {spec!r}")
+    presets = {"default": _core.GraspSettings, "contacts": _core.GraspSettings.contacts,
+               "paper": _core.GraspSettings.paper}
+    if spec in presets:
+        return spec, presets[spec]()
     s = _core.GraspSettings()
-    if spec == "default":
-        return spec, s
-    if spec == "paper":
-        s.cos_threshold = _core.PAPER_LITERAL_COS
-        s.across_parts = False
-        s.grasp_time_s = 0
-        s.release_time_s = 0
-        return spec, s
     name, _, fields = spec.partition(":")
     if not name or not fields:
-        raise ValueError(f"rule: expected 'default', 'paper' or 'NAME:field=value,...', got {spec!r}")
+        raise ValueError(f"rule: {expected}, got {spec!r}")
     for item in fields.split(","):
         key, eq, value = item.partition("=")
         key = key.strip()
@@ -968,7 +966,7 @@ def main(argv=None) -> int:
                     help="recordings or folders of them (the docs use ../shared/assets/leap_recordings; "
                          "none are looked for elsewhere)")
     ap.add_argument("--rule", action="append",
-                    help="grasp settings to judge: default, paper, or NAME:field=value,... (repeat to compare)")
+                    help="grasp settings to judge: default, contacts, paper, or NAME:field=value,... (repeat to compare)")
     ap.add_argument("--sweep-frames", type=int, default=SWEEP_FRAMES,
                     help=f"placement frames per hand in the sweep (default {SWEEP_FRAMES})")
     ap.add_argument("--json", action="store_true", help="print the results as one JSON document")

@@ -1,5 +1,6 @@
-/* A minimal C host: the paper's jewelry box, one right hand pinching the lid's lip and swinging it open about the
- * hinge over two seconds at 60 Hz; prints the lid angle every 10 frames. Only handsim.h and libhandsim. */
+/* A minimal C host: the paper's jewelry box, one right hand arriving open at the lid's lip, closing its pinch there
+ * and swinging the lid open about the hinge over two seconds at 60 Hz; prints the lid angle every 10 frames. Only
+ * handsim.h and libhandsim. */
 #include "handsim.h"
 
 #include <inttypes.h>
@@ -19,7 +20,7 @@ int main(void) {
   handsim_world* world = NULL;
   handsim_jewelry_box box;
   handsim_hand_id hand;
-  handsim_hand_pose_params pinch;
+  handsim_hand_pose_params pinch, shape;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
   handsim_hand_frame frame;
   uint64_t hash = 0;
@@ -39,15 +40,17 @@ int main(void) {
   frame.joints = joints;
 
   printf("frame  time_s  hand_deg  lid_deg  grasped\n");
-  for (i = 0; i <= 130; ++i) {
-    /* 10 frames to close the pinch, then the hand swings to 80 degrees over 2 s. */
-    const double t = i < 10 ? 0.0 : (i - 10) / 120.0;
+  for (i = 0; i <= 140; ++i) {
+    /* The hand closes its pinch over 0.25 s as people do (the default grasp rule grasps only a closing hand), then
+     * from frame 20 it swings to 80 degrees over 2 s. */
+    const double t = i < 20 ? 0.0 : (i - 20) / 120.0;
     const double hand_angle = (t < 1.0 ? t : 1.0) * 80.0 * pi / 180.0;
     handsim_pose palm;
     handsim_joint_state hinge;
     handsim_grasp_info grasp;
+    CHECK(handsim_closing_grip(&pinch, i * dt, 0.25, &shape));
     CHECK(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, hand_angle, 0.0, &palm));
-    CHECK(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &pinch, joints, HANDSIM_HAND_JOINT_COUNT));
+    CHECK(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
     CHECK(handsim_step(world, dt, &frame, 1));
     CHECK(handsim_get_joint_state(world, box.hinge, &hinge));
     CHECK(handsim_body_grasp(world, box.lid, &grasp));

@@ -17,16 +17,26 @@ using Handsim;
 
 static class CSharpTest
 {
-    // scenario.h: 60 Hz; 10 frames closing the pinch, a 2 s swing to 100 degrees, 20 frames holding.
-    const int Frames = 150;
+    // scenario.h: 60 Hz; the hand arrives open and closes its pinch over 0.25 s, from frame 20 a 2 s swing to
+    // 100 degrees, 20 frames holding.
+    const int Frames = 160;
     const double Dt = 1.0 / 60.0;
+    const double ClosingS = 0.25;
+    const int SwingFrom = 20;
 
     static double ScenarioAngle(int frame)
     {
-        double t = (frame - 10) / 120.0;
+        double t = (frame - SwingFrom) / 120.0;
         if (t < 0.0) t = 0.0;
         if (t > 1.0) t = 1.0;
         return t * (100.0 * Math.PI / 180.0);
+    }
+
+    // Frame i of the scenario's right hand: the lid pinch closing onto the lip (scenario_grip_t), then swung.
+    static void ScenarioHand(World world, JewelryBox box, int frame, TrackedHand input)
+    {
+        HandPoseParams shape = HandPoseParams.LidPinch.Closing(frame * Dt, ClosingS);
+        Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(frame)), shape, input.Joints);
     }
 
     static int checks, failures;
@@ -185,7 +195,6 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            HandPoseParams shape = HandPoseParams.LidPinch;
             var input = new TrackedHand(HandSide.Right);
             Event[] events = null;
             double maxAngle = double.MinValue, minAngle = double.MaxValue, maxViolation = 0;
@@ -195,7 +204,7 @@ static class CSharpTest
             var outsideSeconds = new List<double>();  // World.Step's wall time minus the time the core's stages report
             for (int i = 0; i < Frames; ++i)
             {
-                Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), shape, input.Joints);
+                ScenarioHand(world, box, i, input);
                 watch.Restart();
                 world.Step(Dt, input);
                 watch.Stop();
@@ -247,6 +256,21 @@ static class CSharpTest
         }
     }
 
+    // The contacts rule differs from the default only in the hand's closing and opening, the paper's from it in eq.
+    // 3's reading and hysteresis; a grip closes from open.
+    static void TestGraspRuleAndGrips()
+    {
+        GraspSettings g = WorldSettings.Default.Grasp, contacts = GraspSettings.Contacts, paper = GraspSettings.Paper;
+        g.ClosingDistance = g.OpeningDistance = 0;
+        Check(g.Equals(contacts), "the contacts rule differs from the default in more than closing/opening");
+        Check(paper.CosThreshold == 0.7 && paper.AcrossParts == 0 && paper.GraspTimeS == 0 && paper.ReleaseTimeS == 0 &&
+              paper.ClosingDistance == 0 && paper.ReleaseDistance == contacts.ReleaseDistance, "the paper's rule");
+        HandPoseParams pinch = HandPoseParams.LidPinch;
+        Check(pinch.Closing(0).ThumbOpposition == 0 && pinch.Closing(ClosingS).Equals(pinch), "closing runs from open to the grip");
+        Check(pinch.Opened(0.5).ThumbOpposition == 0.5 * pinch.ThumbOpposition, "half open halves the opposition");
+        Rejects(null, () => pinch.Closing(0.1, 0), Status.InvalidArgument, "duration: must be finite and > 0");
+    }
+
     static void TestScenario(string cHashFile)
     {
         ulong a = RunScenario(true), b = RunScenario(false);
@@ -264,8 +288,7 @@ static class CSharpTest
     // each of the next 300 frames; bad bytes throw naming "state" with the world unchanged.
     static void TestSaveRestore()
     {
-        const int saveAt = 60, frames = 300;
-        HandPoseParams shape = HandPoseParams.LidPinch;
+        const int saveAt = 80, frames = 300;
         var input = new TrackedHand(HandSide.Right);
         using (var a = new World())
         using (var b = new World())
@@ -275,7 +298,7 @@ static class CSharpTest
             b.AddHand(HandDef.Default);
             Action<World, JewelryBox, int> step = (w, box, i) =>
             {
-                Hands.MakeFrame(HandSide.Right, w.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), shape, input.Joints);
+                ScenarioHand(w, box, i, input);
                 w.Step(Dt, input);
             };
             for (int i = 0; i < saveAt; ++i) step(a, boxA, i);
@@ -306,9 +329,9 @@ static class CSharpTest
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
             var input = new TrackedHand(HandSide.Right);
-            for (int i = 0; i < 20; ++i)
+            for (int i = 0; i < SwingFrom; ++i)
             {
-                Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(i)), HandPoseParams.LidPinch, input.Joints);
+                ScenarioHand(world, box, i, input);
                 world.Step(Dt, input);
             }
             BodyDef def = BodyDef.Default;
@@ -583,7 +606,6 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            HandPoseParams shape = HandPoseParams.LidPinch;
             var input = new TrackedHand(HandSide.Right);
             var two = new TrackedHand[] { input };
             BodyId[] bodies = { box.Base, box.Lid };
@@ -597,8 +619,7 @@ static class CSharpTest
             {
                 for (int k = 0; k < count; ++k, ++frame)
                 {
-                    Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, ScenarioAngle(frame % Frames)),
-                                    shape, input.Joints);
+                    ScenarioHand(world, box, frame % Frames, input);
                     if (frame % 2 == 0) world.Step(Dt, input); else world.Step(Dt, two);
                     int n = world.Events(ref events);
                     for (int e = 0; e < n; ++e) sink += (ulong)events[e].Type;
@@ -648,6 +669,7 @@ static class CSharpTest
                           Native.handsim_abi_version().ToString("x8") + ", " + IntPtr.Size * 8 + "-bit mono");
         TestLayouts();
         TestEnums();
+        TestGraspRuleAndGrips();
         TestScenario(args[0]);
         TestBadInputs();
         TestSaveRestore();

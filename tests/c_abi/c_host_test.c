@@ -74,6 +74,17 @@ static void expect_rejected(const handsim_world* world, int got, int status, con
 
 /* --- the scenario ----------------------------------------------------------------------------------------- */
 
+/* Frame i of scenario.h's right hand: the lid pinch closing onto the lip, then swung with the lid. */
+static void scenario_hand(const handsim_world* world, const handsim_jewelry_box* box, int i,
+                          handsim_joint_pose* joints) {
+  handsim_hand_pose_params pinch, shape;
+  handsim_pose palm;
+  MUST(handsim_lid_pinch_shape(&pinch));
+  MUST(handsim_closing_grip(&pinch, scenario_grip_t(i), SCENARIO_CLOSING_S, &shape));
+  MUST(handsim_jewelry_box_lid_pinch_palm(world, box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
+  MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
+}
+
 typedef struct scenario_result {
   uint64_t hash;
   double max_angle, min_angle, final_angle, max_violation;
@@ -85,7 +96,6 @@ static scenario_result run_scenario(void) {
   handsim_world* world = NULL;
   handsim_jewelry_box box;
   handsim_hand_id hand = 0;
-  handsim_hand_pose_params shape;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
   handsim_hand_frame frame;
   handsim_event events[16];
@@ -93,17 +103,14 @@ static scenario_result run_scenario(void) {
   MUST(handsim_world_create(NULL, &world));
   MUST(handsim_build_jewelry_box(world, NULL, &box));
   MUST(handsim_add_hand(world, NULL, &hand));
-  MUST(handsim_lid_pinch_shape(&shape));
   frame.handedness = HANDSIM_RIGHT;
   frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
   frame.joints = joints;
   for (i = 0; i < SCENARIO_FRAMES; ++i) {
-    handsim_pose palm;
     handsim_joint_state hinge;
     handsim_grasp_info grasp;
     int32_t n = 0, k;
-    MUST(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
-    MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
+    scenario_hand(world, &box, i, joints);
     MUST(handsim_step(world, SCENARIO_DT, &frame, 1));
     MUST(handsim_get_joint_state(world, box.hinge, &hinge));
     MUST(handsim_body_grasp(world, box.lid, &grasp));
@@ -376,13 +383,12 @@ static void test_hand_outputs(handsim_world* world, handsim_hand_id hand) {
 
 /* --- save and restore: a world restored from handsim_save_state's bytes continues bit for bit ------------- */
 
-#define SAVE_AT 60         /* the lid is held, half way up its swing */
+#define SAVE_AT 80         /* the lid is held, a third of the way up its swing */
 #define CONTINUE_FOR 1000  /* frames compared after the save (the schedule holds the lid at its stop from 130) */
 
 typedef struct pinch_world {
   handsim_world* world;
   handsim_jewelry_box box;
-  handsim_hand_pose_params shape;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
   handsim_hand_frame frame;
 } pinch_world;
@@ -392,16 +398,13 @@ static void pinch_world_create(pinch_world* p) {
   MUST(handsim_world_create(NULL, &p->world));
   MUST(handsim_build_jewelry_box(p->world, NULL, &p->box));
   MUST(handsim_add_hand(p->world, NULL, &hand));
-  MUST(handsim_lid_pinch_shape(&p->shape));
   p->frame.handedness = HANDSIM_RIGHT;
   p->frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
   p->frame.joints = p->joints;
 }
 
 static void pinch_world_step(pinch_world* p, int i) {
-  handsim_pose palm;
-  MUST(handsim_jewelry_box_lid_pinch_palm(p->world, &p->box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
-  MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &p->shape, p->joints, HANDSIM_HAND_JOINT_COUNT));
+  scenario_hand(p->world, &p->box, i, p->joints);
   MUST(handsim_step(p->world, SCENARIO_DT, &p->frame, 1));
 }
 
@@ -525,11 +528,11 @@ static void test_bad_inputs(void) {
   frames[0].joint_count = HANDSIM_HAND_JOINT_COUNT;
   frames[0].joints = joints;
   frames[1] = frames[0];
-  for (i = 0; i < 20; ++i) {
-    MUST(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
-    MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
+  for (i = 0; i < SCENARIO_SWING_FROM; ++i) {
+    scenario_hand(world, &box, i, joints);
     MUST(handsim_step(world, SCENARIO_DT, frames, 1));
   }
+  MUST(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, 0.0, 0.0, &palm));
   test_hand_outputs(world, hand);
   stale = add_box(world, 1, 2, 0.5, 2);
   MUST(handsim_remove_body(world, stale));
@@ -653,6 +656,13 @@ static void test_bad_inputs(void) {
   REJECT(world, handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT),
          HANDSIM_INVALID_ARGUMENT, "params.curl_ring: must be finite");
   REJECT(world, handsim_bind_frame(3, 1.0, joints, HANDSIM_HAND_JOINT_COUNT), HANDSIM_INVALID_ARGUMENT, "handedness:");
+  REJECT(world, handsim_closing_grip(NULL, 0.1, SCENARIO_CLOSING_S, &shape), HANDSIM_INVALID_ARGUMENT,
+         "grip: must not be null");
+  REJECT(world, handsim_closing_grip(&shape, NAN, SCENARIO_CLOSING_S, &shape), HANDSIM_INVALID_ARGUMENT,
+         "t: must be finite");
+  REJECT(world, handsim_closing_grip(&shape, 0.1, 0.0, &shape), HANDSIM_INVALID_ARGUMENT, "duration: must be finite and > 0");
+  REJECT(world, handsim_open_grip(&shape, 1.5, &shape), HANDSIM_INVALID_ARGUMENT, "openness:");
+  REJECT(world, handsim_open_grip(&shape, 0.5, NULL), HANDSIM_INVALID_ARGUMENT, "out_params: must not be null");
   {
     handsim_hand_def hand_def;
     MUST(handsim_hand_def_default(&hand_def));
@@ -805,6 +815,31 @@ static void test_mirrored_defs(void) {
   printf("mirrored defs: %d C fields, each a row of the def table\n", checked);
 }
 
+/* The contacts rule differs from the default only in the hand's closing and opening, the paper's from it in eq. 3's
+ * reading and hysteresis; a grip closes from open. */
+static void test_grasp_rule_and_grips(void) {
+  handsim_world_settings settings;
+  handsim_grasp_settings contacts, paper, g;
+  handsim_hand_pose_params pinch, p;
+  MUST(handsim_world_settings_default(&settings));
+  MUST(handsim_grasp_settings_contacts(&contacts));
+  MUST(handsim_grasp_settings_paper(&paper));
+  g = settings.grasp;
+  g.closing_distance = g.opening_distance = 0;
+  CHECK(memcmp(&g, &contacts, sizeof g) == 0, "the contacts rule differs from the default in more than closing/opening");
+  CHECK(paper.cos_threshold == 0.7 && !paper.across_parts && paper.grasp_time_s == 0 && paper.release_time_s == 0 &&
+            paper.closing_distance == 0 && paper.opening_distance == 0 && paper.release_distance == contacts.release_distance,
+        "the paper's rule");
+  REJECT(NULL, handsim_grasp_settings_paper(NULL), HANDSIM_INVALID_ARGUMENT, "out_settings: must not be null");
+  MUST(handsim_lid_pinch_shape(&pinch));
+  MUST(handsim_closing_grip(&pinch, 0.0, SCENARIO_CLOSING_S, &p));
+  CHECK(p.thumb_opposition == 0 && p.curl_index == 0 && p.scale == pinch.scale, "closing starts open");
+  MUST(handsim_closing_grip(&pinch, SCENARIO_CLOSING_S, SCENARIO_CLOSING_S, &p));
+  CHECK(memcmp(&p, &pinch, sizeof p) == 0, "closing ends at the grip");
+  MUST(handsim_open_grip(&pinch, 0.5, &p));
+  CHECK(p.thumb_opposition == 0.5 * pinch.thumb_opposition, "half open halves the opposition");
+}
+
 int main(int argc, char** argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: %s <hash_out> [<reference_hash_file>]\n", argv[0]);
@@ -817,6 +852,7 @@ int main(int argc, char** argv) {
   test_layout();
   test_enums();
   test_mirrored_defs();
+  test_grasp_rule_and_grips();
   test_scenario(argv[1], argc > 2 ? argv[2] : NULL);
   test_shapes_and_joints();
   test_step_report();

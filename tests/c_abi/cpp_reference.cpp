@@ -28,6 +28,12 @@ namespace {
 using namespace handsim;
 using Clock = std::chrono::steady_clock;
 
+// Frame i of scenario.h's right hand through the C++ API: the lid pinch closing onto the lip, then swung.
+HandFrame scenario_hand(const World& world, const JewelryBox& box, int i) {
+  return make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, scenario_angle(i)),
+                         closing_grip(lid_pinch_shape(), scenario_grip_t(i), SCENARIO_CLOSING_S));
+}
+
 struct Run {
   uint64_t hash = 0;
   double step_seconds = 0;  // sum over the frames of the step call alone
@@ -38,11 +44,9 @@ Run run_cpp() {
   World world;
   const JewelryBox box = build_jewelry_box(world);
   world.add_hand(HandDef{});
-  const HandPoseParams shape = lid_pinch_shape();
   std::vector<HandFrame> frames(1);
   for (int i = 0; i < SCENARIO_FRAMES; ++i) {
-    frames[0] = make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, scenario_angle(i)),
-                                shape);
+    frames[0] = scenario_hand(world, box, i);
     const auto t0 = Clock::now();
     world.step(SCENARIO_DT, frames);
     r.step_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
@@ -63,15 +67,17 @@ Run run_c_abi() {
   handsim_world* world = nullptr;
   handsim_jewelry_box box;
   handsim_hand_id hand = 0;
-  handsim_hand_pose_params shape;
+  handsim_hand_pose_params pinch;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
   MUST(handsim_world_create(nullptr, &world));
   MUST(handsim_build_jewelry_box(world, nullptr, &box));
   MUST(handsim_add_hand(world, nullptr, &hand));
-  MUST(handsim_lid_pinch_shape(&shape));
+  MUST(handsim_lid_pinch_shape(&pinch));
   const handsim_hand_frame frame{HANDSIM_RIGHT, HANDSIM_HAND_JOINT_COUNT, joints};
   for (int i = 0; i < SCENARIO_FRAMES; ++i) {
     handsim_pose palm;
+    handsim_hand_pose_params shape;
+    MUST(handsim_closing_grip(&pinch, scenario_grip_t(i), SCENARIO_CLOSING_S, &shape));
     MUST(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, scenario_angle(i), 0.0, &palm));
     MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
     const auto t0 = Clock::now();
@@ -120,10 +126,8 @@ void bench(int reps) {
     MUST(handsim_world_create(nullptr, &cworld));
     MUST(handsim_build_jewelry_box(cworld, nullptr, &cbox));
     MUST(handsim_add_hand(cworld, nullptr, &chand));
-    const HandPoseParams shape = lid_pinch_shape();
     for (int i = 0; i < SCENARIO_FRAMES; ++i) {
-      const Pose palm = box.lid_pinch_palm(world, Handedness::Right, scenario_angle(i));
-      frames[0] = make_hand_frame(Handedness::Right, palm, shape);
+      frames[0] = scenario_hand(world, box, i);
       for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) {
         const JointPose& p = frames[0].joints[size_t(j)];
         const Quat& q = p.orientation;

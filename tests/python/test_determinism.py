@@ -47,7 +47,7 @@ def test_hash_is_the_same_in_another_process():
 
 def c_abi_scenario_angle(frame):
     """tests/c_abi/scenario.h, operation for operation (+, -, *, / only, so bit-identical to C)."""
-    t = (frame - 10) / 120.0
+    t = (frame - 20) / 120.0  # SCENARIO_SWING_FROM
     t = min(max(t, 0.0), 1.0)
     return t * (100.0 * 3.14159265358979323846 / 180.0)
 
@@ -62,8 +62,9 @@ def test_python_driver_matches_the_c_abi_host(tmp_path):
     world = handsim.World()
     box = handsim.build_jewelry_box(world)
     world.add_hand(handsim.HandDef())
-    shape = handsim.lid_pinch_shape()
-    for i in range(150):  # SCENARIO_FRAMES of scenario.h
+    pinch = handsim.lid_pinch_shape()
+    for i in range(160):  # SCENARIO_FRAMES of scenario.h
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, c_abi_scenario_angle(i), 0.0)
+        shape = handsim.closing_grip(pinch, i * (1.0 / 60.0), 0.25)  # scenario_grip_t, SCENARIO_CLOSING_S
         world.step(1.0 / 60.0, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
     assert world.state_hash() == native, f"Python 0x{world.state_hash():016x} vs C ABI host 0x{native:016x}"

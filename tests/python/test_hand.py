@@ -487,6 +487,19 @@ def test_grasp_settings_and_particle_contacts_on_the_world_def():
         handsim.GraspSettings(threshold=1)
 
 
+def test_grasp_rules_to_compare_with():
+    """GraspSettings.contacts() is the default without the hand's closing and opening; paper() is it with eq. 3
+    as printed (docs/grasp.md)."""
+    fields = [f for f in dir(handsim.GraspSettings()) if not f.startswith("_") and f not in ("contacts", "paper")]
+    d, c, p = handsim.GraspSettings(), handsim.GraspSettings.contacts(), handsim.GraspSettings.paper()
+    assert c.closing_distance == 0 and c.opening_distance == 0
+    assert [f for f in fields if getattr(c, f) != getattr(d, f)] in ([], ["closing_distance", "opening_distance"])
+    assert sorted(f for f in fields if getattr(p, f) != getattr(c, f)) == [
+        "across_parts", "cos_threshold", "grasp_time_s", "release_time_s"]
+    assert p.cos_threshold == handsim.PAPER_LITERAL_COS and not p.across_parts
+    assert p.grasp_time_s == 0 and p.release_time_s == 0
+
+
 # --- glTF hands -----------------------------------------------------------------------------------------
 
 def hands_dir():

@@ -75,6 +75,16 @@ struct GraspSettings {
   // 4 samples (50 ms at 60 Hz) for the throw velocity: a least-squares slope over 4 samples weighs one bad
   // frame 0.3x as much as a two-frame difference does, and lags only ~25 ms.
   int velocity_window = 4;
+
+  // The rule before the hand's intent was read (the default until issue 20's intent rule became it; docs/grasp.md,
+  // "Intent"): eq. 3 from where the skin is, with this hysteresis and release; closing_distance and
+  // opening_distance 0 (no closing needed, no release on opening, no two-hand squeeze). Every other field as the
+  // default.
+  static GraspSettings contacts();
+  // Eq. 3 as printed in the paper (python -m handsim.intent --rule paper): contacts() with cos_threshold =
+  // kPaperLiteralCos, any two contacts (across_parts false), grasp and release on the first frame (grasp_time_s
+  // and release_time_s 0).
+  static GraspSettings paper();
 };
 // Throws handsim::Error naming the bad field.
 // Throws Error naming prefix + the field ("world.grasp.cos_threshold"); docs/reliability.md lists the ranges.
