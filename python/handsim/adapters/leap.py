@@ -20,10 +20,11 @@ a Y-up scene with the user at +Z, as in handsim):
 
 Older frames (formatVersion 0.1/1) lack ``carpPosition`` and ``btipPosition``. They are rebuilt with Leap's
 own hand model, whose proportions are fixed (measured on the formatVersion 2 recording, constant in every
-frame): the fingertip end lies 1.2987 times as far from the dip joint as ``tipPosition``; the middle
-metacarpal is 1.4475 times as long as the middle proximal bone and points along
-0.9885 ``direction`` + 0.1483 ``palmNormal`` ± 0.0295 (``direction`` x ``palmNormal``) (+ for a right hand);
-the other metacarpal bases follow from the wrist by the 15 % rule. Those joints are reported as synthesized.
+frame): the fingertip end lies 1.2987 times as far from the dip joint as ``tipPosition``; each finger's
+metacarpal bone is rigid in the palm frame (``METACARPALS``: its length in middle proximal bones and its
+direction in (``direction``, ``palmNormal``, ``direction`` x ``palmNormal``), the last mirrored for a left
+hand), so its base is the mcp joint less that bone. Leap scales its model as a whole by the middle proximal
+bone (:func:`model_scale`). Those joints are reported as synthesized.
 Joint orientations are built from the positions (:func:`handsim.adapters.skeleton.orientations`).
 
 What a real recording may lack is not an error (``LeapRecording.notes`` counts each case):
@@ -63,8 +64,11 @@ from .lzstring import decompress_from_base64
 
 MM = 0.001
 TIP_EXTENSION = 1.2987
-MIDDLE_METACARPAL_PER_PROXIMAL = 1.4475
-METACARPAL_DIRECTION = (0.9885, 0.1483, 0.0295)  # in (direction, palmNormal, direction x palmNormal), right hand
+# Leap's metacarpal bones (carp -> mcp joint), rigid in its palm frame and scaled with the hand (measure_hand_model,
+# model_scale): per finger, the length in middle proximal bones (mcp -> pip) and the unit direction in
+# (direction, palmNormal, direction x palmNormal) of a right hand (the last component mirrored for a left one)
+METACARPALS = {"index": (1.5263, (0.9749, 0.1483, 0.1660)), "middle": (1.4475, (0.9885, 0.1483, 0.0295)),
+               "ring": (1.2996, (0.9815, 0.1483, -0.1213)), "little": (1.2030, (0.9600, 0.1059, -0.2593))}
 PALM_OFFSET_MM = (-9.0783, -9.1987, 1.9203)  # OpenXR palm - Leap palmPosition, same axes, right hand
 LIMIT_MM = 1e6  # 1 km: far beyond any tracker, near enough that squares and products stay finite
 MATCH_MM = 80.0  # an untyped pointable further than this from every flat fingertip is not matched
@@ -207,24 +211,34 @@ def _skeleton_frame(hand: dict, fingers: Dict[int, dict], handedness, where: str
             if point is not None:
                 pos[j] = point * MM
                 given[j] = True
+    synthesized += _rebuild_metacarpals(hand, pos, given, handedness, where)
     # the wrist, from the middle metacarpal base
-    meta, prox = _J["middle_metacarpal"], _J["middle_proximal"]
-    if not given[meta]:
-        d, n = _vec(hand, "direction", where), _vec(hand, "palmNormal", where)
-        if d is None or n is None:
-            raise ValueError(f"{where}: direction and palmNormal are needed without carpPosition")
-        a, b, c = METACARPAL_DIRECTION
-        if handedness == _core.Handedness.LEFT:
-            c = -c
-        axis = a * d + b * n + c * np.cross(d, n)
-        length = MIDDLE_METACARPAL_PER_PROXIMAL * np.linalg.norm(pos[_J["middle_intermediate"]] - pos[prox])
-        base = pos[prox] - length * axis / np.linalg.norm(axis)
-        pos[_core.WRIST] = skeleton.wrist_from_metacarpal(base, pos[prox])
-    else:
-        pos[_core.WRIST] = skeleton.wrist_from_metacarpal(pos[meta], pos[prox])
+    pos[_core.WRIST] = skeleton.wrist_from_metacarpal(pos[_J["middle_metacarpal"]], pos[_J["middle_proximal"]])
     given[_core.WRIST] = True
     synthesized = ["wrist"] + synthesized
     return skeleton.adapted_frame(handedness, pos, given, synthesized=synthesized)
+
+
+def _rebuild_metacarpals(hand: dict, pos: np.ndarray, given: np.ndarray, handedness, where: str) -> List[str]:
+    """Places the finger metacarpal bases a frame lacks (no carpPosition) where Leap's own hand model has them:
+    the finger's mcp joint less its METACARPALS bone, scaled by the hand's middle proximal bone (Leap scales its
+    whole model alike: model_scale). `pos` (26, 3) m and `given` are changed in place; returns the names."""
+    missing = [f for f in METACARPALS if not given[_J[f + "_metacarpal"]]]
+    if not missing:
+        return []
+    d, n = _vec(hand, "direction", where), _vec(hand, "palmNormal", where)
+    if d is None or n is None:
+        raise ValueError(f"{where}: direction and palmNormal are needed without carpPosition")
+    # Leap's left hand is the mirror of its right (model_scale: its knuckles are)
+    c = np.cross(d, n) if handedness == _core.Handedness.RIGHT else -np.cross(d, n)
+    scale = np.linalg.norm(pos[_J["middle_intermediate"]] - pos[_J["middle_proximal"]])
+    for f in missing:
+        length, (a, b, e) = METACARPALS[f]
+        axis = a * d + b * n + e * c
+        j = _J[f + "_metacarpal"]
+        pos[j] = pos[_J[f + "_proximal"]] - length * scale * axis / np.linalg.norm(axis)
+        given[j] = True
+    return [f + "_metacarpal" for f in missing]
 
 
 # Leap's finger `direction` is that of the intermediate bone (pip -> dip): for the thumb, whose Leap mcp is
@@ -601,35 +615,116 @@ def without_skeleton(doc: dict) -> dict:
     return {"metadata": doc["metadata"], "frames": frames}
 
 
-def measure_hand_model(path) -> dict:
-    """The proportions of Leap's hand model that :func:`leap_hand_frame` uses for older frames, measured on a
-    formatVersion 2 recording (mean and spread over every hand of every frame)."""
+def _v2_frames(path):
+    """The frame objects of a formatVersion 2 recording (the one that has carpPosition and btipPosition)."""
     doc = read_leap_document(path)
     if doc.get("metadata", {}).get("formatVersion") != 2:
         raise ValueError("path: the hand model is measured on a formatVersion 2 recording (it has carp/btip)")
-    rows = {"tip_extension": [], "middle_metacarpal_per_proximal": [], "metacarpal_direction": [],
-            "palm_offset_mm": [], "palm_offset_in_palm_axes_mm": []}
-    for fr in _unpack_v2(doc["frames"]):
+    return doc, _unpack_v2(doc["frames"])
+
+
+def _own_fingers(fr: dict, hand: dict) -> Dict[int, dict]:
+    return {p["type"]: p for p in fr["pointables"] if p.get("handId") == hand["id"] and "type" in p}
+
+
+def _in_palm_axes(hand: dict, v: np.ndarray) -> np.ndarray:
+    """v in (direction, palmNormal, direction x palmNormal) of the hand, the last mirrored for a left hand."""
+    d, n = np.asarray(hand["direction"], float), np.asarray(hand["palmNormal"], float)
+    c = np.cross(d, n) * (1 if hand.get("type") != "left" else -1)
+    return np.array([v @ d, v @ n, v @ c])
+
+
+def measure_hand_model(path) -> dict:
+    """The proportions of Leap's hand model that :func:`leap_hand_frame` uses for older frames, measured on a
+    formatVersion 2 recording (mean and spread over every hand of every frame)."""
+    _, frames = _v2_frames(path)
+    rows = collections.defaultdict(list)
+    for fr in frames:
         for hand in fr["hands"]:
-            fingers = {p["type"]: p for p in fr["pointables"] if p["handId"] == hand["id"]}
+            fingers = _own_fingers(fr, hand)
             v = lambda t, k: np.asarray(fingers[t][k], float)
             for t in range(5):
                 rows["tip_extension"].append(np.linalg.norm(v(t, "btipPosition") - v(t, "dipPosition")) /
                                              np.linalg.norm(v(t, "tipPosition") - v(t, "dipPosition")))
-            meta = v(2, "mcpPosition") - v(2, "carpPosition")
-            rows["middle_metacarpal_per_proximal"].append(
-                np.linalg.norm(meta) / np.linalg.norm(v(2, "pipPosition") - v(2, "mcpPosition")))
-            d, n = np.asarray(hand["direction"], float), np.asarray(hand["palmNormal"], float)
-            u = meta / np.linalg.norm(meta)
-            rows["metacarpal_direction"].append([u @ d, u @ n, u @ np.cross(d, n)])
+            proximal = np.linalg.norm(v(2, "pipPosition") - v(2, "mcpPosition"))
+            for t, f in enumerate(_LEAP_FINGERS[1:], 1):
+                bone = v(t, "mcpPosition") - v(t, "carpPosition")
+                rows[f"{f}_metacarpal_per_middle_proximal"].append(np.linalg.norm(bone) / proximal)
+                rows[f"{f}_metacarpal_direction"].append(_in_palm_axes(hand, bone / np.linalg.norm(bone)))
             palm = 0.5 * (v(2, "mcpPosition") + v(2, "carpPosition"))
             offset = palm - np.asarray(hand["palmPosition"], float)
             rows["palm_offset_mm"].append(np.linalg.norm(offset))
-            rows["palm_offset_in_palm_axes_mm"].append([offset @ d, offset @ n, offset @ np.cross(d, n)])
+            rows["palm_offset_in_palm_axes_mm"].append(_in_palm_axes(hand, offset))
     return {k: (np.mean(r, axis=0).round(4).tolist(), float(np.std(r, axis=0).max())) for k, r in rows.items()}
+
+
+def without_carp(doc: dict) -> dict:
+    """A formatVersion 2 document as formatVersion 1 frames: objects, without the carpPosition, btipPosition and
+    bone bases that older frames lack (what :func:`metacarpal_errors` rebuilds and checks)."""
+    frames = [{**fr, "pointables": [{k: v for k, v in p.items() if k not in ("carpPosition", "btipPosition", "bases")}
+                                    for p in fr["pointables"]]} for fr in _unpack_v2(doc["frames"])]
+    return {"metadata": {**doc["metadata"], "formatVersion": 1}, "frames": frames}
+
+
+def metacarpal_errors(path) -> Dict[str, float]:
+    """{finger: largest distance (mm) over all frames between the metacarpal base rebuilt from a formatVersion 2
+    recording stripped of carpPosition (:func:`without_carp`) and Leap's own carpPosition}."""
+    doc, frames = _v2_frames(path)
+    rebuilt = read_leap_json(without_carp(doc), "stripped")
+    out = {f: 0.0 for f in skeleton.FINGERS}
+    for fr, conv in zip(frames, rebuilt.frames):
+        for hand in fr["hands"]:
+            fingers = _own_fingers(fr, hand)
+            p = np.asarray(conv[hand["type"]].frame.positions) / MM
+            for t, f in enumerate(_LEAP_FINGERS[1:], 1):
+                miss = np.linalg.norm(p[_J[f + "_metacarpal"]] - np.asarray(fingers[t]["carpPosition"], float))
+                out[f] = max(out[f], float(miss))
+    return out
+
+
+def model_scale(paths) -> Dict[str, dict]:
+    """How Leap scales its hand model, from the knuckles (mcp joints), which every skeleton frame has. Per
+    formatVersion ("2", "0.1/1": the two generations of Leap's service in the recordings), pooled over the
+    recordings: the range of middle proximal bone lengths (mm) of its hands, each knuckle's place relative to
+    the middle knuckle in the palm axes (left hands mirrored) in middle proximal bones, and the largest spread
+    of that place over all hands, in mm at the largest hand. A spread near 0 over hands of several sizes and
+    both sides: the model is scaled as a whole by that bone, and a left hand is the mirror of a right one."""
+    sizes, rows = collections.defaultdict(list), collections.defaultdict(list)
+    for path in paths:
+        doc = read_leap_document(path)
+        version = "2" if doc["metadata"].get("formatVersion") == 2 else "0.1/1"
+        for fr in _unpack_v2(doc["frames"]) if version == "2" else doc["frames"]:
+            for hand in fr.get("hands", []):
+                fingers = _own_fingers(fr, hand)
+                if len(fingers) < 5 or any(fingers[t].get(k) is None for t in range(5) for k in _SKELETON_KEYS):
+                    continue
+                mcp = lambda t: np.asarray(fingers[t]["mcpPosition"], float)
+                proximal = float(np.linalg.norm(np.asarray(fingers[2]["pipPosition"], float) - mcp(2)))
+                sizes[version].append(proximal)
+                rows[version].append([_in_palm_axes(hand, mcp(t) - mcp(2)) / proximal for t in (1, 3, 4)])
+    out = {}
+    for version, r in rows.items():
+        r, size = np.asarray(r), np.asarray(sizes[version])
+        out[version] = {"proximal_mm": (float(size.min()), float(size.max())), "hands": len(r),
+                        "knuckles_per_proximal": r.mean(axis=0),
+                        "spread_mm": float((r.max(axis=0) - r.min(axis=0)).max() * size.max())}
+    return out
 
 
 if __name__ == "__main__":
     import sys
     for key, (mean, spread) in measure_hand_model(sys.argv[1]).items():
         print(f"{key}: {mean} (largest standard deviation {spread:.1e})")
+    errors = metacarpal_errors(sys.argv[1])
+    print("metacarpal bases rebuilt without carpPosition, largest distance to Leap's carpPosition (mm): " +
+          ", ".join(f"{f} {e:.2f}" for f, e in errors.items()))
+    scales = model_scale(dict.fromkeys(sys.argv[1:]))
+    for version, m in sorted(scales.items()):
+        print(f"formatVersion {version}: {m['hands']} hands, middle proximal {m['proximal_mm'][0]:.2f}-"
+              f"{m['proximal_mm'][1]:.2f} mm; index, ring, little knuckle from the middle one in middle proximals "
+              f"{m['knuckles_per_proximal'].round(4).tolist()}, largest spread {m['spread_mm']:.3f} mm")
+    if len(scales) == 2:
+        old, new = scales["0.1/1"], scales["2"]
+        gap = np.linalg.norm(old["knuckles_per_proximal"] - new["knuckles_per_proximal"], axis=1) * old["proximal_mm"][1]
+        print("knuckle layouts of the two generations differ by (index, ring, little, mm at the largest 0.1/1 "
+              "hand): " + ", ".join(f"{g:.1f}" for g in gap))
