@@ -6,6 +6,8 @@
 
 #include <pybind11/stl.h>
 
+#include <charconv>
+
 namespace py = pybind11;
 
 namespace handsim {
@@ -139,17 +141,68 @@ void bind_defs(py::module_& m) {
 
 BodyId to_body_id(py::handle h, const char* argument) { return cast_arg<BodyId>(h, argument); }
 
-// hands=None or a sequence of HandFrame, checked item by item ("hands[1]: expected a HandFrame, got int").
+// The deprecated list form: a sequence of HandFrame, checked item by item ("hands[1]: expected a HandFrame,
+// got int"), with a DeprecationWarning pointing at the caller's line.
 std::vector<HandFrame> to_frames(py::handle hands) {
   std::vector<HandFrame> frames;
-  if (hands.is_none()) return frames;
   if (!py::isinstance<py::sequence>(hands) || py::isinstance<py::str>(hands))
-    throw py::type_error("hands: expected a list of HandFrame, got " +
+    throw py::type_error("hands: expected a dict {HandId: HandFrame}, got " +
                          std::string(py::str(py::type::of(hands).attr("__name__"))));
+  if (PyErr_WarnEx(PyExc_DeprecationWarning,
+                   "World.step(dt, [frame, ...]) drives hands by their order in hands(), which a removed and "
+                   "re-added hand changes; pass {hand_id: frame, ...} instead (the list form goes in the next "
+                   "version)",
+                   2) < 0)  // 2: the caller's line, past handsim.argument_errors' wrapper of every method
+    throw py::error_already_set();
   py::sequence seq = py::reinterpret_borrow<py::sequence>(hands);
   for (size_t i = 0; i < seq.size(); ++i)
     frames.push_back(cast_arg<HandFrame>(seq[i], "hands[" + std::to_string(i) + "]"));
   return frames;
+}
+
+// {HandId: HandFrame} in the dict's order; a key is named as Python indexes the dict:
+// "hands[HandId(index=0, generation=1)]: expected a HandFrame, got int".
+std::string key_name(HandId id) { return "hands[" + id_repr("HandId", id.index, id.generation) + "]"; }
+
+std::vector<HandInput> to_inputs(const py::dict& hands) {
+  std::vector<HandInput> inputs;
+  inputs.reserve(hands.size());
+  for (auto [key, frame] : hands) {
+    if (!py::isinstance<HandId>(key))
+      throw py::type_error("hands: key " + std::string(py::repr(key)) + " (" +
+                           std::string(py::str(py::type::of(key).attr("__name__"))) + ") is not a HandId");
+    const HandId id = key.cast<HandId>();
+    inputs.push_back({id, cast_arg<HandFrame>(frame, key_name(id))});
+  }
+  return inputs;
+}
+
+// The core names an entry by its position, "hands[k].hand" or "hands[k].frame.<field>"; a dict has no
+// positions, so the error is renamed after the entry's key: "hands[HandId(...)]" or "hands[HandId(...)].<field>".
+Error renamed_by_key(const Error& e, const std::vector<HandInput>& inputs) {
+  const std::string& argument = e.argument();
+  const std::string message = std::string(e.what()).substr(argument.empty() ? 0 : argument.size() + 2);
+  const std::string head = "hands[";
+  const size_t close = argument.find(']');
+  size_t k = 0;
+  if (argument.rfind(head, 0) != 0 || close == std::string::npos ||
+      std::from_chars(argument.data() + head.size(), argument.data() + close, k).ptr != argument.data() + close ||
+      k >= inputs.size())
+    return e;
+  std::string rest = argument.substr(close + 1);
+  for (const char* part : {".hand", ".frame"})
+    if (rest.rfind(part, 0) == 0) rest = rest.substr(std::string(part).size());
+  return Error(e.status(), key_name(inputs[k].hand) + rest, message);
+}
+
+StepReport step_by_id(World& w, double dt, const py::dict& hands) {
+  const std::vector<HandInput> inputs = to_inputs(hands);
+  try {
+    py::gil_scoped_release release;
+    return w.step(dt, inputs);
+  } catch (const Error& e) {
+    throw renamed_by_key(e, inputs);
+  }
 }
 
 void bind_world_class(py::module_& m) {
@@ -197,14 +250,18 @@ void bind_world_class(py::module_& m) {
            "Set the linear (m/s) and angular (rad/s) velocity, both (3,) in the world frame.")
       .def("step",
            [](World& w, double dt, py::handle hands) {
+             if (hands.is_none()) return step_by_id(w, dt, py::dict());
+             if (py::isinstance<py::dict>(hands)) return step_by_id(w, dt, py::reinterpret_borrow<py::dict>(hands));
              std::vector<HandFrame> frames = to_frames(hands);
              py::gil_scoped_release release;
              return w.step(dt, frames);
            },
            py::arg("dt"), py::arg("hands") = py::none(),
-           "Advance one frame of dt seconds. hands[i] (a HandFrame) drives the i-th hand of hands(); hands\n"
-           "without a frame are untracked this frame. Everything is validated before anything changes.\n"
-           "Returns the StepReport (World.last_step keeps it).")
+           "Advance one frame of dt seconds. hands is {HandId: HandFrame}: each frame drives the hand its key\n"
+           "names; live hands without an entry are untracked this frame. A key that names no live hand of this\n"
+           "world raises StaleIdError naming it (hands[HandId(...)]). Everything is validated before anything\n"
+           "changes. Returns the StepReport (World.last_step keeps it). Deprecated: a list of HandFrame, the\n"
+           "i-th driving the i-th hand of hands() (DeprecationWarning; it goes in the next version).")
       .def_property_readonly("time", &World::time)
       .def("state_hash", &World::state_hash,
            "Stable 64-bit hash of everything that decides the world's future (bodies, joints, Bullet's copies\n"

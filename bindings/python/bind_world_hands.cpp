@@ -71,10 +71,10 @@ void bind_world_methods(py::module_& m) {
            },
            py::arg("definition"), py::arg("mesh") = py::none(), py::arg("bind") = py::none(),
            "A hand with the procedural mesh, or with a SkinnedMesh bound at the HandFrame bind (e.g. from\n"
-           "handsim.gltf.load_gltf_hand). Frames passed to step drive the hands in the order of hands().")
+           "handsim.gltf.load_gltf_hand); returns its HandId, the key of its frame in step's dict.")
       .def("remove_hand", [](World& w, py::handle hand) { w.remove_hand(to_hand_id(hand)); }, py::arg("hand"),
            "Remove the hand (its grasps end); its HandId becomes stale.")
-      .def("hands", &World::hands, "HandIds of the live hands: the order in which step() takes their frames.")
+      .def("hands", &World::hands, "HandIds of the live hands, in slot order (a re-added hand may take a removed one's place).")
       .def("hand_model",
            [](py::object self, py::handle hand) {
              const HandId id = to_hand_id(hand);

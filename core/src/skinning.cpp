@@ -333,13 +333,12 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 }  // namespace
 
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
-StageReport World::Impl::pose_hands(const std::vector<HandFrame>& frames, double dt) {
+StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
   int tracked = 0, skinned = 0, in_reach = 0;
-  size_t k = 0;
-  for (HandSlot& h : hands) {
+  for (uint32_t i = 0; i < hands.size(); ++i) {
+    HandSlot& h = hands[i];
     if (!h.alive) continue;
-    const HandFrame* frame = k < frames.size() ? &frames[k] : nullptr;
-    ++k;
+    const HandFrame* frame = frames[i];
     if (!frame || !frame->tracked()) {
       h.state.tracked = false;
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room

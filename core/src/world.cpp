@@ -375,7 +375,7 @@ void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular
   impl_->backend->write(b.backend, b.pose, linear, angular);
 }
 
-StepReport World::step(double dt) { return step(dt, {}); }  // locks there
+StepReport World::step(double dt) { return step(dt, std::vector<HandInput>()); }  // locks there
 
 double World::time() const {
   const auto held = lock();

@@ -221,7 +221,10 @@ struct World::Impl {
   // pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps,
   // follow_primary_hands and retake_secondary_hands grasp.cpp, fit_touched_bodies pose_fit.cpp, simulate
   // world_step.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
-  StageReport pose_hands(const std::vector<HandFrame>& frames, double dt);
+  // This step's frame of each hand slot, indexed like `hands` (null: no frame, the hand is untracked).
+  using SlotFrames = std::vector<const HandFrame*>;
+  StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
+  StageReport pose_hands(const SlotFrames& frames, double dt);
   StageReport detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
@@ -254,7 +257,11 @@ struct World::Impl {
   StageReport solve_joints(double dt);
   StageReport retake_secondary_hands();
 
-  void validate_step(double dt, const std::vector<HandFrame>& frames) const;
+  // Step input checks (world_step.cpp): everything is checked before anything changes.
+  void validate_dt(double dt) const;
+  void validate_hand_frame(const HandFrame& frame, const HandSlot& h, const std::string& argument) const;
+  SlotFrames frames_by_id(double dt, const std::vector<HandInput>& inputs) const;
+  SlotFrames frames_by_position(double dt, const std::vector<HandFrame>& list) const;  // deprecated overload
 
   // Save and restore (world_state.cpp).
   std::vector<uint8_t> save_state();

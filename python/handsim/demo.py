@@ -62,7 +62,7 @@ def run(on_step: Optional[Callable[[DemoState], None]] = None, tasks=TASKS) -> L
             base0 = np.asarray(world.body_pose(box.base))
         else:  # keep the box where the open task left it
             box = bench.box
-        sim = users.SimulatedUser(user, world, box, experiments.DT)
+        sim = users.SimulatedUser(user, world, box, experiments.DT, hands=(bench.right, bench.left))
         t0 = world.time
         while not sim.done and world.time - t0 < experiments.TIME_LIMIT_S:
             frames = sim.frames()

@@ -17,9 +17,8 @@ Layout (version 1), all little-endian::
              f64 radius, i32 valid, i32 reserved (0)
 
 A joint record is byte for byte the C ABI's ``handsim_joint_pose`` (72 bytes), so a C host can read a hand's
-joints straight into ``handsim_joint_pose[26]``. A hand that is not ``present`` gets the untracked frame (every
-joint invalid) when a later hand of the same step is present, and no frame otherwise, as in
-:meth:`handsim.recording.Recording.frames`.
+joints straight into ``handsim_joint_pose[26]``. A hand that is not ``present`` gets no frame that step (it is
+untracked), as in :meth:`handsim.recording.Recording.inputs`.
 """
 from __future__ import annotations
 

@@ -251,7 +251,7 @@ class Particles:
             rows = []
             for i, f in enumerate(track.frames):
                 frame = f.get(side)
-                world.step(_dt(track, i), [frame if frame is not None else _sk.untracked(HANDEDNESS[side])])
+                world.step(_dt(track, i), {hand: frame} if frame is not None else None)  # None: untracked
                 rows.append(np.asarray(world.hand_particles(hand)) if world.hand_tracked(hand) else None)
             self.by_side[side] = rows
 
@@ -440,15 +440,16 @@ def run(track: Track, placement: Placement, settings, hand_defs, start: Optional
     """Steps the judged world through the track from `start` (default: the placement frame) to the end."""
     world, bodies, hinge = build_world(placement, settings, hand_defs)
     names = {b: n for n, b in bodies.items()}
-    hands = world.hands()
+    hands = world.hands()  # in HANDS order: build_world adds them so to a new world
     first = placement.frame if start is None else start
     frames = np.arange(first, len(track.times))
     held = np.zeros((len(frames), 2), bool)
     lid = np.zeros(len(frames)) if hinge is not None else None
     begins, snap, snap_centre = [], None, None
     for s, i in enumerate(frames):
-        given = [track.frames[i].get(side) or _sk.untracked(HANDEDNESS[side]) for side in HANDS]
-        world.step(_dt(track, i), given)
+        given = {hand: track.frames[i][side] for hand, side in zip(hands, HANDS)
+                 if track.frames[i].get(side) is not None}
+        world.step(_dt(track, i), given)  # a side without a frame is untracked
         for e in world.events():
             if e.type == _core.EventType.GRASP_BEGIN and e.body in names:
                 begins.append((int(i), HANDS[hands.index(e.hand)], names[e.body]))

@@ -8,7 +8,7 @@ replay checks itself. The file format (``FORMAT_VERSION`` 1) is documented in ``
 alone.
 
     rec = Recorder("jewelry_box", hands=[HandDef(handedness=Handedness.RIGHT)])
-    rec.step(1 / 60, [frame])                  # drives rec.world
+    rec.step(1 / 60, {rec.hands[0]: frame})   # drives rec.world
     rec.set_joint_value("hinge", 0.3)          # an edit, recorded with the step it precedes
     rec.save("session.npz")
     result = replay(load("session.npz"))       # result.matches: every step's hash equal
@@ -114,21 +114,15 @@ class Recording:
         """Number of recorded steps (S)."""
         return int(len(self.dt))
 
-    def frames(self, step: int):
-        """The list given to World.step at `step` (hands without a frame are left out only at the end,
-        so a missing hand in the middle is an untracked frame)."""
-        out = []
-        for h, hand in enumerate(self.hands):
-            if self.present[step, h]:
-                out.append(_core.HandFrame(_core.Handedness.__members__[hand["handedness"]], self.positions[step, h],
-                                           self.orientations[step, h], self.radii[step, h], self.valid[step, h]))
-            else:
-                out.append(None)
-        while out and out[-1] is None:
-            out.pop()
-        from .adapters.skeleton import untracked
-        return [f if f is not None else untracked(_core.Handedness.__members__[self.hands[h]["handedness"]])
-                for h, f in enumerate(out)]
+    def inputs(self, step: int, hands: Sequence) -> dict:
+        """What World.step takes at `step`: {hands[h]: HandFrame} for each recorded hand h given a frame then
+        (a hand without one is untracked that step). `hands`: the HandIds of the recording's hands, in the
+        recording's order, as :func:`build_world` returns them."""
+        if len(hands) != len(self.hands):
+            raise ValueError(f"hands: {len(hands)} ids for the recording's {len(self.hands)} hands")
+        return {hands[h]: _core.HandFrame(_core.Handedness.__members__[hand["handedness"]], self.positions[step, h],
+                                          self.orientations[step, h], self.radii[step, h], self.valid[step, h])
+                for h, hand in enumerate(self.hands) if self.present[step, h]}
 
     def save(self, path) -> Path:
         """Writes the recording as a format-1 ``.npz`` archive (docs/input.md); returns the path written."""
@@ -205,12 +199,12 @@ def check(rec: Recording, name: str = "recording"):
 
 
 def build_world(rec: Recording):
-    """A fresh World with the recording's WorldDef, scene and hands: (world, scene)."""
+    """A fresh World with the recording's WorldDef, scene and hands: (world, scene, hand ids in the
+    recording's order)."""
     world = _core.World(world_def_from_dict(rec.world))
     scene = _scenes.build_scene(world, rec.scene, rec.scene_params)
-    for hand in rec.hands:
-        world.add_hand(hand_def_from_dict(hand))
-    return world, scene
+    hands = [world.add_hand(hand_def_from_dict(hand)) for hand in rec.hands]
+    return world, scene, hands
 
 
 def apply_edit(world, scene, edit: dict):
@@ -238,8 +232,9 @@ def apply_edit(world, scene, edit: dict):
 class Recorder:
     """Builds a world from a named scene and records everything that drives it.
 
-    ``hands``: HandDefs in the order frames are given (default: one right hand). Drive the world only through
-    :meth:`step` and the edit methods; read it freely through ``recorder.world``."""
+    ``hands``: HandDefs (default: one right hand); ``recorder.hands`` are their HandIds in that order, the
+    keys :meth:`step` takes. Drive the world only through :meth:`step` and the edit methods; read it freely
+    through ``recorder.world``."""
 
     def __init__(self, scene: str = "jewelry_box", scene_params: dict = None, world_def=None,
                  hands: Sequence = None, info: dict = None):
@@ -256,21 +251,23 @@ class Recorder:
                               np.zeros((0, len(hands), J, 3)), np.zeros((0, len(hands), J, 4)),
                               np.zeros((0, len(hands), J)), np.zeros((0, len(hands), J), bool), [], np.zeros(0, np.uint64),
                               dict(info or {}))
-        self.world, self.scene = build_world(self._rec)
+        self.world, self.scene, self.hands = build_world(self._rec)
         self._rows = []
 
-    def step(self, dt: float, frames: Sequence = ()):
-        """Steps ``self.world`` with one HandFrame per hand (fewer: the last hands are untracked) and records
-        the inputs and the resulting state hash; a step the world rejects raises and records nothing."""
-        frames = list(frames or [])
-        if len(frames) > len(self._rec.hands):
-            raise ValueError(f"frames: {len(frames)} frames for {len(self._rec.hands)} hands")
-        self.world.step(dt, frames)  # validates everything first; a rejected step records nothing
+    def step(self, dt: float, hands: dict = None):
+        """Steps ``self.world`` with {HandId: HandFrame} (keys from ``self.hands``; a hand without an entry is
+        untracked) and records the inputs and the resulting state hash; a step the world rejects raises and
+        records nothing."""
+        hands = dict(hands or {})
+        self.world.step(dt, hands)  # validates everything first (an id not of this world too); records nothing then
         n = len(self._rec.hands)
         row = {"dt": float(dt), "present": np.zeros(n, bool), "positions": np.zeros((n, J, 3)),
                "orientations": np.tile([0.0, 0, 0, 1], (n, J, 1)), "radii": np.full((n, J), 0.01),
                "valid": np.zeros((n, J), bool), "hash": self.world.state_hash()}
-        for h, f in enumerate(frames):
+        for h, hand in enumerate(self.hands):
+            f = hands.get(hand)
+            if f is None:
+                continue
             row["present"][h] = True
             row["positions"][h] = f.positions
             row["orientations"][h] = f.orientations
@@ -347,7 +344,7 @@ def replay(rec: Recording, on_step: Callable = None, steps: Optional[int] = None
     recorded one when the recording has them; a recording without them (made from tracker input) gets them
     from a full replay, so that it can be saved and checked later."""
     check(rec)
-    world, scene = build_world(rec)
+    world, scene, hands = build_world(rec)
     edits = sorted(rec.edits, key=lambda e: e["step"])  # stable: same-step edits keep their order
     k = 0
     mismatch = None
@@ -357,7 +354,7 @@ def replay(rec: Recording, on_step: Callable = None, steps: Optional[int] = None
         while k < len(edits) and edits[k]["step"] == i:
             apply_edit(world, scene, edits[k])
             k += 1
-        world.step(float(rec.dt[i]), rec.frames(i))
+        world.step(float(rec.dt[i]), rec.inputs(i, hands))
         hashes[i] = world.state_hash()
         if rec.hashes is not None and mismatch is None and int(rec.hashes[i]) != world.state_hash():
             mismatch = i

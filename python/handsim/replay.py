@@ -184,7 +184,7 @@ def _particles_by_frame(frames, hand_def, skip=()):
     hand = world.add_hand(hand_def)
     points = []
     for frame in frames:
-        world.step(DT, [frame])
+        world.step(DT, {hand: frame})
         q = np.asarray(world.hand_particles(hand)) if world.hand_tracked(hand) else np.zeros((0, 3))
         points.append(_without_nearest(q, frame, skip) if skip else q)
     return points, world.hand_model(hand).particle_radius

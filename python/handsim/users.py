@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import List, Optional, Tuple
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -214,8 +214,9 @@ def untracked_frame(handedness):
 
 class SimulatedUser:
     """Produces the hand frames of one trial. Call :meth:`frames` once per frame before ``World.step``; it
-    reads the box's current state (as a subject reads the screen) and returns the frames for
-    ``world.hands()`` = [right, left] (two-hand trials) or [right] (the left hand is then untracked).
+    reads the box's current state (as a subject reads the screen) and returns ``{HandId: HandFrame}`` for
+    ``hands`` = (right, left) (default: the world's first two hands; a hand without a frame is untracked, and
+    one-hand trials never drive the left).
 
     The right hand goes through: ``reach`` (to a hover pose above the lip, then down in front of it, the hand
     open), ``close_in`` (onto the lip, closing the grasp shape from the open hand), ``grip``, ``swing`` (about the hinge, to
@@ -226,8 +227,9 @@ class SimulatedUser:
 
     MAX_RETRIES = 3
 
-    def __init__(self, params: UserParams, world, box, dt: float = 1 / FRAME_RATE):
+    def __init__(self, params: UserParams, world, box, dt: float = 1 / FRAME_RATE, hands: Sequence = None):
         self.p, self.world, self.box, self.dt = params, world, box, dt
+        self.right_hand, self.left_hand = (list(hands) if hands is not None else world.hands()[:2] + [None])[:2]
         self.right = Glove(params, _h.Handedness.RIGHT, 0, dt)
         self.left = Glove(params, _h.Handedness.LEFT, 1, dt) if params.hands == 2 else None
         self.grasp_shape = GRASP_SHAPES[params.style]
@@ -320,7 +322,7 @@ class SimulatedUser:
         return self.p.target_angle if self.p.task == "open" else math.radians(1)
 
     # --- the state machine ---
-    def frames(self) -> List:
+    def frames(self) -> dict:
         d = self.durations()
         angle = self._angle()
         p = self.p
@@ -437,10 +439,9 @@ class SimulatedUser:
     def _emit(self, palm, shape, left_pose, left_shape):
         self.right_pose = np.asarray(palm, float)
         self.left_pose = left_pose
-        frames = [self.right.frame(self.t, palm, shape)]
-        if self.left is not None:
-            frames.append(untracked_frame(_h.Handedness.LEFT) if left_pose is None else
-                          self.left.frame(self.t, left_pose, left_shape))
+        frames = {self.right_hand: self.right.frame(self.t, palm, shape)}
+        if self.left is not None and left_pose is not None:  # the glove has not picked the left hand up yet
+            frames[self.left_hand] = self.left.frame(self.t, left_pose, left_shape)
         self.t += self.dt
         self.phase_t += self.dt
         return frames

@@ -30,7 +30,7 @@ def record() -> recording.Recording:
     for i in range(FRAMES):
         palm = rec.scene.box.lid_pinch_palm(rec.world, handsim.Handedness.RIGHT, scenario_angle(i), 0.0)
         shape = handsim.closing_grip(pinch, i * DT, CLOSING_S)  # scenario_grip_t
-        rec.step(DT, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
+        rec.step(DT, {rec.hands[0]: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)})
     return rec.recording
 
 

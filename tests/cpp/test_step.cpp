@@ -888,3 +888,77 @@ TEST(Step, DISABLED_MeasureGraspHysteresis) {
   for (double d : {0.0, 0.0025, 0.008}) row(2, 3, d);
   row(1, 1, 0.0);
 }
+
+// Hands addressed by id (issue 21 item 4). A freed hand slot is reused by the next add_hand: after
+// remove_hand(a); add_hand(c), c sits in a's slot, ahead of b in hands(). A frame given for b drives b.
+TEST(Step, AFrameDrivesTheHandItNamesAfterASlotIsReused) {
+  World world;
+  const HandId a = world.add_hand(HandDef{Handedness::Right});
+  const HandId b = world.add_hand(HandDef{Handedness::Right});
+  world.remove_hand(a);
+  const HandId c = world.add_hand(HandDef{Handedness::Right});
+  ASSERT_EQ(c.index, a.index);  // the reuse this test is about
+  ASSERT_TRUE(world.hands() == (std::vector<HandId>{c, b}));
+  const Pose there = translation(Vec3(0.3, 0.5, -0.2));
+  world.step(kDt, {HandInput{b, make_hand_frame(Handedness::Right, there)}});
+  EXPECT_TRUE(world.hand_tracked(b));
+  EXPECT_FALSE(world.hand_tracked(c));  // no entry: untracked this step
+  expect_pose_near(world.hand_palm_pose(b), there, 1e-12, "b");
+  // The deprecated positional overload takes hands() order, so the same frame would have driven c.
+  world.step(kDt, std::vector<HandFrame>{make_hand_frame(Handedness::Right, there)});
+  EXPECT_TRUE(world.hand_tracked(c));
+  EXPECT_FALSE(world.hand_tracked(b));
+}
+
+// A null, stale, unknown or repeated id, or a bad frame, is refused naming the entry; nothing changes.
+TEST(Step, BadHandInputIsRefusedNamingTheEntryAndLeavesTheWorldUnchanged) {
+  Scene s;
+  s.grasp();
+  const HandFrame good = s.pinch.frame(s.rest, s.hold());
+  const HandId stale = s.world.add_hand(HandDef{Handedness::Left});
+  s.world.remove_hand(stale);
+  HandFrame left = good;
+  left.handedness = Handedness::Left;
+  HandFrame nan_joint = good;
+  nan_joint.joints[7].position.y() = std::nan("");
+  struct Case {
+    const char* name;
+    std::vector<HandInput> hands;
+    Status status;
+    const char* argument;
+  };
+  const std::vector<Case> cases = {
+      {"null id", {{HandId{}, good}}, Status::StaleId, "hands[0].hand"},
+      {"removed hand", {{s.hand, good}, {stale, good}}, Status::StaleId, "hands[1].hand"},
+      {"index past every slot", {{HandId{7, 1}, good}}, Status::StaleId, "hands[0].hand"},
+      {"old generation", {{HandId{s.hand.index, s.hand.generation + 1}, good}}, Status::StaleId, "hands[0].hand"},
+      {"the same hand twice", {{s.hand, good}, {s.hand, good}}, Status::InvalidArgument, "hands[1].hand"},
+      {"wrong handedness", {{s.hand, left}}, Status::InvalidArgument, "hands[0].frame.handedness"},
+      {"NaN in a valid joint", {{s.hand, nan_joint}}, Status::InvalidArgument, "hands[0].frame.joints[7].position"},
+  };
+  const uint64_t hash = s.world.state_hash();
+  const Pose palm = s.world.hand_palm_pose(s.hand);
+  const size_t events = s.world.events().size();
+  const double time = s.world.time();
+  for (const Case& c : cases) {
+    try {
+      s.world.step(kDt, c.hands);
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.status(), c.status) << c.name;
+      EXPECT_EQ(e.argument(), c.argument) << c.name << ": " << e.what();
+    }
+    EXPECT_EQ(s.world.state_hash(), hash) << c.name;
+    EXPECT_EQ(s.world.events().size(), events) << c.name;
+    EXPECT_EQ(s.world.time(), time) << c.name;
+    EXPECT_TRUE(s.world.hand_tracked(s.hand)) << c.name;
+    expect_pose_near(s.world.hand_palm_pose(s.hand), palm, 0.0, c.name);
+  }
+  try {
+    s.world.step(kDt, {{s.hand, good}, {s.hand, good}});
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("already has a frame, in hands[0]"), std::string::npos) << e.what();
+  }
+  s.world.step(kDt, {{s.hand, good}});
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+}

@@ -23,7 +23,7 @@ def scene():
     palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, 0.0, 0.0)
     frame = handsim.make_hand_frame(handsim.Handedness.RIGHT, palm)
     for _ in range(3):
-        world.step(1 / 60, [frame])
+        world.step(1 / 60, {hand: frame})
     other = handsim.World()
     foreign = other.add_body(handsim.BodyDef(shape=handsim.Shape.sphere(0.1)))
     return world, box, hand, frame, foreign
@@ -54,12 +54,14 @@ def rows(world, box, hand, frame, foreign):
         ("step dt<0", lambda: world.step(-1.0), err, "dt"),
         ("step dt=nan", lambda: world.step(NAN), err, "dt"),
         ("step dt huge", lambda: world.step(1e300), err, "dt"),
-        ("step too many hands", lambda: world.step(1 / 60, [frame, frame]), err, "hands"),
-        ("step nan joint", lambda: world.step(1 / 60, [bad_frame(frame, position=NAN)]), err, "joints[10]"),
-        ("step zero quaternion", lambda: world.step(1 / 60, [bad_frame(frame, orientation=[0, 0, 0, 0])]), err,
-         "joints[1]"),
-        ("step negative radius", lambda: world.step(1 / 60, [bad_frame(frame, radius=-1)]), err, "joints[4]"),
-        ("step wrong type", lambda: world.step(1 / 60, ["frame"]), TypeError, ""),
+        ("step foreign hand", lambda: world.step(1 / 60, {foreign_hand: frame}), stale, "hands[HandId"),
+        ("step key not an id", lambda: world.step(1 / 60, {0: frame}), TypeError, "hands"),
+        ("step nan joint", lambda: world.step(1 / 60, {hand: bad_frame(frame, position=NAN)}), err, "joints[10]"),
+        ("step zero quaternion", lambda: world.step(1 / 60, {hand: bad_frame(frame, orientation=[0, 0, 0, 0])}),
+         err, "joints[1]"),
+        ("step negative radius", lambda: world.step(1 / 60, {hand: bad_frame(frame, radius=-1)}), err, "joints[4]"),
+        ("step wrong type", lambda: world.step(1 / 60, {hand: "frame"}), TypeError, "hands[HandId"),
+        ("step not a dict", lambda: world.step(1 / 60, frame), TypeError, "hands"),
         ("add_body negative mass", lambda: world.add_body(box_def(mass=-1.0)), err, "mass"),
         ("add_body nan pose", lambda: world.add_body(box_def(pose=[NAN, 0, 0, 0, 0, 0, 1])), err, "pose"),
         ("add_body far pose", lambda: world.add_body(box_def(pose=[1e300, 0, 0, 0, 0, 0, 1])), err, "pose"),

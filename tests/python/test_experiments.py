@@ -27,7 +27,8 @@ def frames_of(user, n=90):
     out = []
     for _ in range(n):
         fr = sim.frames()
-        out.append(np.concatenate([np.asarray(f.positions).ravel() for f in fr]))
+        out.append(np.concatenate([np.asarray(fr[h].positions).ravel() if h in fr else np.zeros(3 * handsim.JOINT_COUNT)
+                                   for h in (bench.right, bench.left)]))
         bench.world.step(X.DT, fr)
     return np.array(out), bench.world.state_hash()
 

@@ -11,7 +11,8 @@ def _session(steps=12, hands=None):
     box = rec.scene.box
     for i in range(steps):
         palm = box.lid_pinch_palm(rec.world, handsim.Handedness.RIGHT, 0.01 * i, 0.0)
-        rec.step(1 / 60, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=handsim.lid_pinch_shape())])
+        rec.step(1 / 60, {rec.hands[0]: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm,
+                                                            params=handsim.lid_pinch_shape())})
     return rec
 
 

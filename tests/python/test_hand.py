@@ -401,7 +401,7 @@ def test_rejected_step_leaves_the_world_unchanged():
     world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05] * 3), mass=1, pose=[0, 0.5, 0, 0, 0, 0, 1]))
     right = handsim.make_hand_frame(RIGHT, [0, 0.3, 0.3, 0, 0, 0, 1])
     for _ in range(10):
-        world.step(DT, [right])
+        world.step(DT, {hand: right})
     before, time, particles = world.state_hash(), world.time, world.hand_particles(hand)
     bad_calls = [
         (handsim.InvalidArgumentError, r"^hands\[0\].handedness: ", lambda: world.step(DT, [handsim.bind_frame(LEFT)])),
@@ -409,7 +409,11 @@ def test_rejected_step_leaves_the_world_unchanged():
         (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(0.0, [right])),
         (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(math.nan, [right])),
         (TypeError, r"^hands\[0\]: expected a HandFrame, got ndarray$", lambda: world.step(DT, [right.positions])),
-        (TypeError, "^hands: expected a list of HandFrame, got HandFrame$", lambda: world.step(DT, right)),
+        (TypeError, r"^hands: expected a dict \{HandId: HandFrame\}, got HandFrame$", lambda: world.step(DT, right)),
+        (handsim.InvalidArgumentError, r"^hands\[HandId\(index=0, generation=\d+\)\]\.handedness: ",
+         lambda: world.step(DT, {hand: handsim.bind_frame(LEFT)})),
+        (TypeError, r"^hands\[HandId\(index=0, generation=\d+\)\]: expected a HandFrame, got ndarray$",
+         lambda: world.step(DT, {hand: right.positions})),
     ]
     for error, message, call in bad_calls:
         with pytest.raises(error, match=message):

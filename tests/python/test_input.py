@@ -753,8 +753,9 @@ def record_session(path):
             rec.remove_body("weight")
         palm = box.lid_pinch_palm(world, RIGHT, 0.2 * i / 90, 0.0)
         right = handsim.make_hand_frame(RIGHT, palm, **vars_of(handsim.lid_pinch_shape()))
-        frames = [right] if i % 30 else [right, skeleton.untracked(LEFT)]
-        rec.step(1 / 60, frames if i != 45 else [])
+        right_hand, left_hand = rec.hands
+        frames = {right_hand: right} if i % 30 else {right_hand: right, left_hand: skeleton.untracked(LEFT)}
+        rec.step(1 / 60, frames if i != 45 else {})
     rec.save(path)
     return rec
 

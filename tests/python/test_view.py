@@ -36,7 +36,7 @@ def _pinch_recording(steps=40):
     rec = recording.Recorder("jewelry_box", hands=[handsim.HandDef(handedness=handsim.Handedness.RIGHT)])
     box = rec.scene.box
     for i in range(steps):
-        rec.step(1 / 60, [_lid_pinch(rec.world, box, lift=0.0004 * i, t=i / 60)])
+        rec.step(1 / 60, {rec.hands[0]: _lid_pinch(rec.world, box, lift=0.0004 * i, t=i / 60)})
     return rec.recording
 
 
@@ -176,11 +176,11 @@ def test_viewer_does_not_change_the_simulation():
     from handsim.view.viewer import Viewer
     rec = _pinch_recording(30)
     plain = recording.replay(rec)
-    world, sc = recording.build_world(rec)
+    world, sc, hands = recording.build_world(rec)
     with Viewer(world, sc.objects, port=0) as v:
         hashes = []
         for i in range(rec.steps):
-            world.step(float(rec.dt[i]), rec.frames(i))
+            world.step(float(rec.dt[i]), rec.inputs(i, hands))
             v.update()
             hashes.append(world.state_hash())
     assert np.array_equal(np.asarray(hashes, np.uint64), rec.hashes)

@@ -141,3 +141,54 @@ def test_errors_share_a_base_class():
     for cls in (handsim.InvalidArgumentError, handsim.StaleIdError, handsim.InvalidStateError,
                 handsim.UnsupportedError, handsim.InternalError):
         assert issubclass(cls, handsim.Error)
+
+
+def test_hands_are_addressed_by_id_after_a_slot_is_reused():
+    """Issue 21 item 4: after remove_hand(a); add_hand(c), c takes a's slot; a frame keyed by b drives b."""
+    right = handsim.Handedness.RIGHT
+    world = handsim.World()
+    a = world.add_hand(handsim.HandDef(handedness=right))
+    b = world.add_hand(handsim.HandDef(handedness=right))
+    world.remove_hand(a)
+    c = world.add_hand(handsim.HandDef(handedness=right))
+    assert c.index == a.index and world.hands() == [c, b]
+    there = [0.3, 0.5, -0.2, 0, 0, 0, 1]
+    world.step(1 / 60, {b: handsim.make_hand_frame(right, there)})
+    assert world.hand_tracked(b) and not world.hand_tracked(c)   # no entry: untracked this step
+    np.testing.assert_allclose(world.hand_palm_pose(b), there, atol=1e-12)
+    # The stale a is refused naming it, and nothing changes.
+    before = world.state_hash()
+    with pytest.raises(handsim.StaleIdError, match=r"^hands\[HandId\(index=0, generation=\d+\)\]: names no live"):
+        world.step(1 / 60, {b: handsim.make_hand_frame(right, there), a: handsim.make_hand_frame(right)})
+    assert world.state_hash() == before and world.hand_tracked(b)
+
+
+def test_step_hand_errors_name_the_key():
+    right = handsim.Handedness.RIGHT
+    world = handsim.World()
+    hand = world.add_hand(handsim.HandDef(handedness=right))
+    world.step(1 / 60, {hand: handsim.make_hand_frame(right)})
+    key = rf"hands\[HandId\(index={hand.index}, generation={hand.generation}\)\]"
+    left = handsim.make_hand_frame(handsim.Handedness.LEFT)
+    frame = handsim.make_hand_frame(right)
+    cases = [
+        ({hand: left}, handsim.InvalidArgumentError, key + r"\.handedness: does not match"),
+        ({hand: 3}, TypeError, key + ": expected a HandFrame, got int"),
+        ({hand.packed: frame}, TypeError, r"hands: key \d+ \(int\) is not a HandId"),
+        ({handsim.HandId.unpack(7): frame}, handsim.StaleIdError, r"hands\[HandId\(index=7, generation=0\)\]: is the null id"),
+        (frame, TypeError, "hands: expected a dict"),
+    ]
+    before = world.state_hash()
+    for hands, exc, message in cases:
+        with pytest.raises(exc, match="^" + message):
+            world.step(1 / 60, hands)
+        assert world.state_hash() == before and world.hand_tracked(hand)
+
+
+def test_step_list_form_is_deprecated_and_still_positional():
+    right = handsim.Handedness.RIGHT
+    world = handsim.World()
+    hand = world.add_hand(handsim.HandDef(handedness=right))
+    with pytest.warns(DeprecationWarning, match=r"pass \{hand_id: frame, \.\.\.\} instead"):
+        world.step(1 / 60, [handsim.make_hand_frame(right)])
+    assert world.hand_tracked(hand)

@@ -18,6 +18,12 @@ namespace handsim {
 
 HANDSIM_DECLARE_ENUM(ParticleContacts, HANDSIM_ENUM_PARTICLE_CONTACTS);
 
+// One hand's input to a step: the frame that drives the hand `hand` (World::step).
+struct HandInput {
+  HandId hand;
+  HandFrame frame;
+};
+
 struct WorldDef {
   Vec3 gravity = Vec3(0, -9.81, 0);
   // Physics runs at a fixed substep so results do not depend on the caller's frame rate; a frame's dt is
@@ -191,9 +197,14 @@ class World {
 
   // --- stepping ---
   StepReport step(double dt);
-  // One frame of Algorithm 1: hands[i] drives the i-th hand of hands() (fewer frames than hands: the
-  // rest are untracked this frame). Everything is validated before anything changes. Returns what the step
-  // did, as last_step() does until the next step.
+  // One frame of Algorithm 1: hands[k].frame drives the hand hands[k].hand; a live hand without an entry is
+  // untracked this frame. A null, stale or repeated id is refused naming hands[k].hand (StaleId for a hand
+  // that is not in this world, InvalidArgument for a repeat). Everything is validated before anything
+  // changes. Returns what the step did, as last_step() does until the next step.
+  StepReport step(double dt, const std::vector<HandInput>& hands);
+  // Deprecated (kept for one version, docs/design.md "Hands addressed by id"): hands[i] drives the i-th hand
+  // of hands(). A freed hand slot is reused by the next add_hand, so after remove_hand(a); add_hand(c) the
+  // frame meant for the hand after a drives c; the overload above cannot mix hands up.
   StepReport step(double dt, const std::vector<HandFrame>& hands);
   double time() const;
   StepReport last_step() const;       // all zero before the first step and after reset()

@@ -18,16 +18,16 @@ BOX_POSE = [0, -0.1, -0.05, 0, 0, 0, 1]
 
 def _pressing_frame(world, hand, depth=0.01):
     """A flat right hand, palm down, lowered until its lowest particle centre is `depth` below y = 0."""
-    world.step(DT, [handsim.make_hand_frame(handsim.Handedness.RIGHT)])
+    world.step(DT, {hand: handsim.make_hand_frame(handsim.Handedness.RIGHT)})
     lowest = world.hand_particles(hand)[:, 1].min()
     return handsim.make_hand_frame(handsim.Handedness.RIGHT, [0, -lowest - depth, 0, 0, 0, 0, 1])
 
 
-def _stage_seconds(world, frames, stage, repeats):
-    """Median and p99 of one stage's C++ time over `repeats` steps cycling through `frames`."""
+def _stage_seconds(world, hand, frames, stage, repeats):
+    """Median and p99 of one stage's C++ time over `repeats` steps of `hand` cycling through `frames`."""
     out = np.empty(repeats)
     for i in range(repeats):
-        report = world.step(DT, [frames[i % len(frames)]])
+        report = world.step(DT, {hand: frames[i % len(frames)]})
         out[i] = next(r.seconds for r in report.stages if r.name == stage)
     return summary(out)
 
@@ -41,13 +41,13 @@ def bench_skinning(repeats):
     # A step (it marks the render mesh stale), then the first call (skinning + copy into numpy) against a second call (the copy alone).
     first, copy = np.empty(repeats), np.empty(repeats)
     for i in range(repeats):
-        world.step(DT, [frames[i % len(frames)]])
+        world.step(DT, {hand: frames[i % len(frames)]})
         first[i] = time_calls(lambda: world.hand_render_vertices(hand), 1, warmup=0)[0]
         copy[i] = time_calls(lambda: world.hand_render_vertices(hand), 1, warmup=0)[0]
     return {
         "render": {"vertices": model.vertex_count, "first_call": summary(first), "copy_only": summary(copy),
                    "skinning_median_s": float(np.median(first) - np.median(copy))},
-        "particles": {"particles": model.particle_count, **_stage_seconds(world, frames, "skinning", repeats)},
+        "particles": {"particles": model.particle_count, **_stage_seconds(world, hand, frames, "skinning", repeats)},
     }
 
 
@@ -57,7 +57,7 @@ def bench_contacts(repeats):
     shape = handsim.Shape.box(BOX_HALF)
     world.add_body(handsim.BodyDef(shape=shape, mass=0, pose=BOX_POSE))
     frame = _pressing_frame(world, hand)
-    world_stage = _stage_seconds(world, [frame], "contacts", repeats)
+    world_stage = _stage_seconds(world, hand, [frame], "contacts", repeats)
     centres = world.hand_particles(hand)
     radius = world.hand_model(hand).particle_radius
 

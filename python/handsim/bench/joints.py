@@ -317,14 +317,14 @@ def run_group(model, iterations, base_mass=0.0):
     box = handsim.build_jewelry_box(world, handsim.JewelryBoxDef(model=model, base_mass=base_mass))
     base_start = world.body_pose(box.base)[:3]
     base_moved = 0.0
-    world.add_hand(handsim.HandDef())
+    hand = world.add_hand(handsim.HandDef())
     pinch = handsim.lid_pinch_shape()
     frames = SETTLE_FRAMES + DRAG_FRAMES
     violation, overshoot, angle, grasped = np.empty(frames), np.empty(frames), np.empty(frames), 0
     for frame in range(frames):
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, drag_angle(frame))
         shape = handsim.closing_grip(pinch, frame / 60)
-        world.step(1 / 60, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
+        world.step(1 / 60, {hand: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)})
         state = world.joint_state(box.hinge)
         violation[frame], overshoot[frame], angle[frame] = state.violation, state.overshoot, state.value
         grasped += world.body_grasp(box.lid).grasped

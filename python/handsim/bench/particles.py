@@ -88,7 +88,7 @@ def press_placement():
     the same hand poses, placed from the skin, not from its own particles."""
     world = handsim.World(handsim.WorldDef(ground=False))
     hand = world.add_hand(handsim.HandDef(particle_count=100))
-    world.step(DT, [handsim.make_hand_frame(R, [0, 1.0, 0, 0, 0, 0, 1])])
+    world.step(DT, {hand: handsim.make_hand_frame(R, [0, 1.0, 0, 0, 0, 0, 1])})
     v = world.hand_render_vertices(hand)
     patch = v[v[:, 1] < v[:, 1].min() + PATCH_BAND]
     centre = (patch.min(axis=0) + patch.max(axis=0)) / 2
@@ -106,10 +106,10 @@ def press(count, sampling, place, radius=0.0, extra_depth=0.0, seed=1):
     for x, z, depth, roll in PRESSES:
         frame = handsim.make_hand_frame(R, _palm(x - cx, BOX_HALF[1] + drop - depth - extra_depth, z - cz, roll))
         frames.append(frame)
-        world.step(DT, [])  # untracked: the hand's motion history restarts, so the fit sees a still hand
+        world.step(DT)  # untracked: the hand's motion history restarts, so the fit sees a still hand
         world.set_body_pose(box, [0, 0, 0, 0, 0, 0, 1])
         world.set_body_velocity(box, [0, 0, 0], [0, 0, 0])
-        world.step(DT, [frame])
+        world.step(DT, {hand: frame})
         linear, angular = world.body_velocity(box)
         rows.append((np.array(linear), np.array(angular), _box_depth(world.hand_render_vertices(hand), BOX_HALF)))
     times = np.empty(TIME_FRAMES)
@@ -117,7 +117,7 @@ def press(count, sampling, place, radius=0.0, extra_depth=0.0, seed=1):
         world.set_body_pose(box, [0, 0, 0, 0, 0, 0, 1])
         world.set_body_velocity(box, [0, 0, 0], [0, 0, 0])
         t0 = time.perf_counter()
-        world.step(DT, [frames[0]])
+        world.step(DT, {hand: frames[0]})
         times[i] = time.perf_counter() - t0
     model = world.hand_model(hand)
     return {"particles": int(model.particle_count), "radius_m": float(model.particle_radius),

@@ -132,17 +132,17 @@ class HandsimLid:
         hd = handsim.HandDef(handedness=handsim.Handedness.RIGHT)
         if self.particles:
             hd.particle_count = self.particles
-        world.add_hand(hd)
+        hand = world.add_hand(hd)
         shape = handsim.lid_pinch_shape()
         R = handsim.Handedness.RIGHT
-        frames = [handsim.make_hand_frame(R, box.lid_pinch_palm(world, R, a), params=shape) for a in _angles()]
+        frames = [{hand: handsim.make_hand_frame(R, box.lid_pinch_palm(world, R, a), params=shape)} for a in _angles()]
         for k in range(SETTLE):
             palm = box.lid_pinch_palm(world, R, _angles()[0])
-            world.step(DT, [handsim.make_hand_frame(R, palm, params=handsim.closing_grip(shape, k * DT))])
+            world.step(DT, {hand: handsim.make_hand_frame(R, palm, params=handsim.closing_grip(shape, k * DT))})
         self.world, self.box, self.frames = world, box, frames
 
     def frame(self, i):
-        self.world.step(DT, [self.frames[i]])
+        self.world.step(DT, self.frames[i])
 
     def errors(self, i):
         s = self.world.joint_state(self.box.hinge)
@@ -177,7 +177,7 @@ def _cube_pinch(world, hand, half):
     def contacts(frame):
         scratch = handsim.World(handsim.WorldDef(ground=False))
         h = scratch.add_hand(handsim.HandDef(handedness=R, particle_count=model.particle_count))
-        scratch.step(DT, [frame])
+        scratch.step(DT, {h: frame})
         return handsim.collide_particles(scratch.hand_particles(h), model.particle_radius, shape,
                                          [0, 0, 0, 0, 0, 0, 1])
 
@@ -235,21 +235,21 @@ class HandsimCube:
         rest = np.array(world.body_pose(cube)[:3])
         hold, open_ = touch + 0.003, touch - 0.02
         for i in range(21):  # down from 10 cm with the thumb open
-            world.step(DT, [pinch(rest + [0, 0.1 * (1 - i / 20), 0], open_)])
+            world.step(DT, {hand: pinch(rest + [0, 0.1 * (1 - i / 20), 0], open_)})
         for i in range(1, 16):  # close
-            world.step(DT, [pinch(rest, open_ + (hold - open_) * i / 15)])
+            world.step(DT, {hand: pinch(rest, open_ + (hold - open_) * i / 15)})
         for i in range(1, 21):  # hold, then lift to the carrying height
-            world.step(DT, [pinch(rest + [0, CARRY_HEIGHT * _smooth(i / 20), 0], hold)])
+            world.step(DT, {hand: pinch(rest + [0, CARRY_HEIGHT * _smooth(i / 20), 0], hold)})
         if not world.body_grasp(cube).grasped:
             raise RuntimeError("handsim cube_carry: the pinch did not grasp the cube")
         start = rest + [0, CARRY_HEIGHT, 0]
         self.targets = _cube_targets(start)
-        self.frames = [pinch(t, hold) for t in self.targets]
+        self.frames = [{hand: pinch(t, hold)} for t in self.targets]
         self.offset = np.array(world.body_pose(cube)[:3]) - start  # where the grasp holds it
         self.world, self.cube = world, cube
 
     def frame(self, i):
-        self.world.step(DT, [self.frames[i]])
+        self.world.step(DT, self.frames[i])
 
     def errors(self, i):
         p = np.array(self.world.body_pose(self.cube)[:3])

@@ -29,7 +29,7 @@ SETTLE_FRAMES = 180  # Bullet puts a body at rest to sleep after 2 s
 def _lowest_offset(world, hand, handedness):
     """How far the lowest particle centre of a flat palm-down hand sits below its palm joint."""
     probe = handsim.make_hand_frame(handedness, [0, 5.0, 0, 0, 0, 0, 1])
-    world.step(DT, [probe])
+    world.step(DT, {hand: probe})
     return 5.0 - float(world.hand_particles(hand)[:, 1].min())
 
 
@@ -44,11 +44,11 @@ def hover_world(particles, hands=1):
     R = handsim.Handedness.RIGHT
     ids = [world.add_hand(handsim.HandDef(handedness=R, particle_count=particles)) for _ in range(hands)]
     drop = _lowest_offset(world, ids[0], R)
-    frames = []
-    for k in range(hands):
+    frames = {}
+    for k, hand in enumerate(ids):
         _static_box(world, 0.5 * k)
         # fingers along -Z: the palm a little behind the box centre so the fingers lie over it
-        frames.append(handsim.make_hand_frame(R, [0.5 * k, 0.1 + drop + HOVER_GAP, 0.04, 0, 0, 0, 1]))
+        frames[hand] = handsim.make_hand_frame(R, [0.5 * k, 0.1 + drop + HOVER_GAP, 0.04, 0, 0, 0, 1])
     return world, frames
 
 
@@ -61,11 +61,11 @@ def boxes_world(n, static=False, hand=True):
                                        pose=[0.1 * (i % side), 0.025, 0.1 * (i // side), 0, 0, 0, 1]))
     for _ in range(SETTLE_FRAMES):
         world.step(DT)
-    frames = []
+    frames = {}
     if hand:
         R = handsim.Handedness.RIGHT
-        world.add_hand(handsim.HandDef(handedness=R))
-        frames = [handsim.make_hand_frame(R, [-3.0, 1.5, -3.0, 0, 0, 0, 1])]
+        far = world.add_hand(handsim.HandDef(handedness=R))
+        frames = {far: handsim.make_hand_frame(R, [-3.0, 1.5, -3.0, 0, 0, 0, 1])}
     return world, frames
 
 

@@ -54,7 +54,7 @@ def _hand(world, handedness, particles, render):
 def _lowest_offset(world, hand, handedness, palm_y=0.5):
     """How far the lowest particle centre sits below the palm joint of a flat, palm-down hand."""
     probe = handsim.make_hand_frame(handedness, [0, palm_y, 0, 0, 0, 0, 1])
-    world.step(DT, [probe])
+    world.step(DT, {hand: probe})
     return palm_y - float(world.hand_particles(hand)[:, 1].min())
 
 
@@ -68,7 +68,7 @@ def _pressing(world, hand, target, frames_total, sway_m=0.01):
         sway = sway_m * math.sin(2 * math.pi * (i % 60) / 60)
         # fingers along -Z: put the palm a little behind the box centre so the fingers lie over it
         palm = [x + sway, top_y + drop - 0.003, z + 0.04, 0, 0, 0, 1]
-        return [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm)]
+        return {hand: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm)}
     return frame
 
 
@@ -78,7 +78,7 @@ def _box(world, x, z=0.0, mass=0.5):
 
 
 def build(scene, pipeline, particles=DEFAULT_PARTICLES, render=DEFAULT_RENDER, frames_total=300, render_threads=1):
-    """(world, hands, frame_fn, warmup): frame_fn(i) gives the step's hand frames for timed frame i."""
+    """(world, hands, frame_fn, warmup): frame_fn(i) gives the step's {HandId: HandFrame} for timed frame i."""
     world = handsim.World(world_def(pipeline, render_threads))
     R, L = handsim.Handedness.RIGHT, handsim.Handedness.LEFT
     if scene == "jewelry_box":
@@ -94,13 +94,13 @@ def build(scene, pipeline, particles=DEFAULT_PARTICLES, render=DEFAULT_RENDER, f
         def frame(i):
             angle = math.radians(OPEN_DEG) * min(1.0, max(0, i) / frames_total)
             palm = box.lid_pinch_palm(world, R, angle)
-            return [handsim.make_hand_frame(R, palm, params=shape), left_frame]
+            return {right: handsim.make_hand_frame(R, palm, params=shape), left: left_frame}
         return world, [right, left], frame, SETTLE, box.lid
     if scene == "far_hand":
         _box(world, 0.0)
         hand = _hand(world, R, particles, render)
         far = handsim.make_hand_frame(R, [2.0, 1.5, 2.0, 0, 0, 0, 1])
-        return world, [hand], (lambda i: [far]), 5, None
+        return world, [hand], (lambda i: {hand: far}), 5, None
     sway = 0.01
     if scene == "free_box":
         body = _box(world, 0.0)

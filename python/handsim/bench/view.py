@@ -25,9 +25,9 @@ REQUIRES_VIEW = "the 'view' extra (viser) is not installed"
 def _world():
     world = _h.World(_h.WorldDef())
     box = _h.build_jewelry_box(world)
-    world.add_hand(_h.HandDef(handedness=_h.Handedness.RIGHT))
-    world.add_hand(_h.HandDef(handedness=_h.Handedness.LEFT))
-    return world, box
+    hands = (world.add_hand(_h.HandDef(handedness=_h.Handedness.RIGHT)),
+             world.add_hand(_h.HandDef(handedness=_h.Handedness.LEFT)))
+    return world, box, hands
 
 
 def _dist_size(name: str) -> int:
@@ -75,7 +75,7 @@ def run(quick: bool = False) -> dict:
     from handsim.view.viewer import Viewer, default_camera
 
     frames = 60 if quick else 240
-    world, box = _world()
+    world, box, hands = _world()
     names = {"base": box.base, "lid": box.lid, "hinge": box.hinge, "table": box.table}
     out = {"frames": frames, "render_vertices_per_hand": int(world.hand_model(world.hands()[0]).vertex_count)}
     t = {"step": [], "describe": [], "send": [], "send_page": []}
@@ -84,7 +84,7 @@ def run(quick: bool = False) -> dict:
     def advance():
         nonlocal i
         c = time.perf_counter()
-        world.step(1 / 60, _h.scenario_frames(box, world, i % _h.SCENARIO_FRAMES))
+        world.step(1 / 60, dict(zip(hands, _h.scenario_frames(box, world, i % _h.SCENARIO_FRAMES))))  # right, left
         t["step"].append(time.perf_counter() - c)
         i += 1
 

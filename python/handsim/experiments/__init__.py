@@ -126,13 +126,13 @@ class Bench:
         self.box = _h.build_jewelry_box(w, box_def(self.method, user))
         if user.task == "close":
             w.set_joint_value(self.box.hinge, 0.5 * math.pi)
-        w.step(DT, [])  # one frame without hands: nothing carries over from the last trial
+        w.step(DT)  # one frame without hands: nothing carries over from the last trial
         return self.box
 
     def run(self, user: _users.UserParams, trace: bool = False) -> TrialResult:
         w = self.world
         box = self.new_box(user)
-        sim = _users.SimulatedUser(user, w, box, DT)
+        sim = _users.SimulatedUser(user, w, box, DT, hands=(self.right, self.left))
         base0 = np.asarray(w.body_pose(box.base), float)
         table_top = float(np.asarray(box.definition.position, float)[1])
         goal_ok = (lambda a: a >= OPEN_GOAL) if user.task == "open" else (lambda a: a <= CLOSED_GOAL)

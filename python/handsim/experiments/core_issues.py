@@ -37,7 +37,7 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
         p = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
         p[:3] += quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
         p = _users.swing_pose(p, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
-        w.step(1 / 60, [_h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))])
+        w.step(1 / 60, {hand: _h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))})
         touching = max(touching, w.body_contact_count(box.base, hand))
         grasped = grasped or w.body_grasp(box.lid).grasped
     moved = float(np.linalg.norm(np.asarray(w.body_pose(box.base))[:3] - b0[:3]))
@@ -53,14 +53,14 @@ def lid_bounces_off_upper_limit(swing_deg: float = 105.0, lid_overhang: float = 
     d = _h.JewelryBoxDef()
     d.lid_overhang = lid_overhang
     box = _h.build_jewelry_box(w, d)
-    w.add_hand(hand_def or _h.HandDef())
+    hand = w.add_hand(hand_def or _h.HandDef())
     closed = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
     reached, worst = False, 0.0
     pinch = _h.lid_pinch_shape()
     for i in range(210):
         angle = _users.min_jerk((i - 20) / 72) * math.radians(swing_deg)
         p = _users.swing_pose(closed, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
-        w.step(1 / 60, [_h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))])
+        w.step(1 / 60, {hand: _h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))})
         s = w.joint_state(box.hinge)
         reached = reached or s.value >= 0.5 * math.pi - 1e-9
         if reached:

@@ -152,7 +152,7 @@ def _hand_world(curl=0.0):
     world = _core.World(_core.WorldDef(ground=False))
     hand = world.add_hand(_core.HandDef(handedness=_core.Handedness.RIGHT))
     frame = _core.make_hand_frame(_core.Handedness.RIGHT, [0, 0.3, 0, 0, 0, 0, 1], curl=curl)
-    world.step(1 / 60, [frame])
+    world.step(1 / 60, {hand: frame})
     return world, hand
 
 

@@ -64,7 +64,7 @@ class ReplayApp:
         self.seek(step)
 
     def _build(self):
-        self.world, self.scene = _rec.build_world(self.rec)
+        self.world, self.scene, self.hands = _rec.build_world(self.rec)
         self.index = -1  # the last step applied; -1: none yet
         self._k = 0
 
@@ -73,7 +73,7 @@ class ReplayApp:
         while self._k < len(self._edits) and self._edits[self._k]["step"] == i:
             _rec.apply_edit(self.world, self.scene, self._edits[self._k])
             self._k += 1
-        self.world.step(float(self.rec.dt[i]), self.rec.frames(i))
+        self.world.step(float(self.rec.dt[i]), self.rec.inputs(i, self.hands))
         self.index = i
 
     def seek(self, step: int):
