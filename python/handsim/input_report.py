@@ -158,10 +158,36 @@ def strength_agreement(motion: "_replay.Motion") -> dict:
     return out
 
 
+def label_agreement(leap) -> Dict[str, tuple]:
+    """How the skeleton's strengths (skeleton.closure_strengths, max(grab, pinch)) label the frames that Leap's own
+    label (the judge's labels, handsim.intent.labels: closed >= 0.9, open < 0.3), every hand of every frame:
+    {"closed": (agreeing, of), "open": (agreeing, of)}."""
+    from . import intent
+    leap_s, skel_s = [], []
+    for i, f in enumerate(leap.frames):
+        for side, a in f.items():
+            col = 0 if side == "right" else 1
+            leap_s.append(np.nanmax([leap.grab[i, col], leap.pinch[i, col]]))
+            skel_s.append(max(_sk.closure_strengths(a.frame)))
+    (lc, lo), (sc, so) = intent.labels(np.array(leap_s)), intent.labels(np.array(skel_s))
+    return {"closed": (int(np.sum(lc & sc)), int(np.sum(lc))), "open": (int(np.sum(lo & so)), int(np.sum(lo)))}
+
+
+def label_table(rows) -> str:
+    """Per recording, the share of Leap's labelled frames that the skeleton's strengths label the same."""
+    pct = lambda k_n: f"{100 * k_n[0] / k_n[1]:.1f} % of {k_n[1]}" if k_n[1] else "–"
+    out = ["| recording | closed (Leap ≥ 0.9) | open (Leap < 0.3) | all labelled |", "|---|---:|---:|---:|"]
+    for r in rows:
+        a = r["labels"]
+        both = (a["closed"][0] + a["open"][0], a["closed"][1] + a["open"][1])
+        out.append(f"| {r['name']} | {pct(a['closed'])} | {pct(a['open'])} | {pct(both)} |")
+    return "\n".join(out)
+
+
 def strength_calibration(rows) -> str:
     """The ranges of the skeleton's closure measures (adapters.skeleton.closure_measures) over every hand of
     every recording, where Leap called it open or closed (grab <= OPEN or >= CLOSED) and not pinching or
-    pinching (pinch <= OPEN or >= CLOSED): what GRAB_FLEXION and PINCH_GAP_M were set between."""
+    pinching (pinch <= OPEN or >= CLOSED): where Leap draws its lines, for comparison with the anchors."""
     flex = {"open": [], "closed": []}
     gap = {"open": [], "pinching": []}
     for r in rows:
@@ -169,21 +195,21 @@ def strength_calibration(rows) -> str:
         for i, f in enumerate(leap.frames):
             for side, a in f.items():
                 col = 0 if side == "right" else 1
-                share, tips = _sk.closure_measures(a.frame)
+                share, pulps = _sk.closure_measures(a.frame)
                 g, p = leap.grab[i, col], leap.pinch[i, col]
                 for store, key, value, low, high in ((flex, ("open", "closed"), share, g, g),
-                                                     (gap, ("open", "pinching"), tips, p, p)):
+                                                     (gap, ("open", "pinching"), pulps, p, p)):
                     if low <= _replay.OPEN:
                         store[key[0]].append(value)
                     elif high >= _replay.CLOSED:
                         store[key[1]].append(value)
     span = lambda v, scale=1.0, digits=2: f"{scale * min(v):.{digits}f}–{scale * max(v):.{digits}f}" if v else "–"
     return (f"Skeleton closure measures where Leap's strengths are decided (grab or pinch ≤ {_replay.OPEN} or "
-            f"≥ {_replay.CLOSED}), every hand of every recording: flexion share open {span(flex['open'])}, "
-            f"closed {span(flex['closed'])} (grab from the skeleton: {_sk.GRAB_FLEXION[0]} → 0, "
-            f"{_sk.GRAB_FLEXION[1]} → 1); thumb–index gap not pinching {span(gap['open'], 1000, 0)} mm, pinching "
-            f"{span(gap['pinching'], 1000, 0)} mm (pinch: {1000 * _sk.PINCH_GAP_M[0]:.0f} mm → 0, "
-            f"{1000 * _sk.PINCH_GAP_M[1]:.0f} mm → 1).")
+            f"≥ {_replay.CLOSED}), every hand of every recording: grab angle as a share of make_hand_frame's fist "
+            f"open {span(flex['open'])}, closed {span(flex['closed'])} (the skeleton's grab is that share); "
+            f"thumb–finger pulp gap not pinching {span(gap['open'], 1000, 0)} mm, pinching "
+            f"{span(gap['pinching'], 1000, 0)} mm (the skeleton's pinch: 1 at 0 mm, the pulps touching, 0 at the "
+            f"flat hand's {1000 * _sk._anchors()[1]:.0f} mm).")
 
 
 def run_all(assets: Path, img: Path = None, reach: float = _replay.REACH) -> List[dict]:
@@ -201,7 +227,7 @@ def run_all(assets: Path, img: Path = None, reach: float = _replay.REACH) -> Lis
         rebuilt = rebuild_error(doc, name) if leap.format_version != 2 else None
         rows.append({"name": name, "leap": leap, "motion": motion, "jewelry": runs[0][1], "free": runs[1][1],
                      "placement": runs[1][0].info["placement"], "checks": checks, "rebuilt": rebuilt,
-                     "strengths": strength_agreement(motion),
+                     "strengths": strength_agreement(motion), "labels": label_agreement(leap),
                      "cpu_s": time.process_time() - c0})
     return rows
 
@@ -269,6 +295,9 @@ def main(argv=None) -> int:
              "and the closing hand from Leap's strengths and from the skeleton's (`replay.with_strengths`; a "
              "formatVersion 2 file is not stripped):\n\n" + rebuild_table(rows))
     text += "\n\n" + strength_calibration(rows)
+    text += ("\n\nLeap's open and closed labels (the judge's: max(grab, pinch) ≥ 0.9 closed, < 0.3 open) given the "
+             "same by the skeleton's strengths (`skeleton.closure_strengths`), every hand of every frame:\n\n"
+             + label_table(rows))
     text += (f"\n\n{len(rows)} recordings, {sum(len(r['checks']) for r in rows)} checks, "
              f"{sum(not ok for r in rows for ok in r['checks'].values())} not met; "
              f"{time.perf_counter() - c0:.0f} s wall for the whole run.")

