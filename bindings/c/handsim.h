@@ -133,6 +133,7 @@ typedef struct handsim_grasp_settings {
   double squeeze_distance;  /* m: an opposing pair carried this far into the body by the hand's articulation within
                                closing_window_s begins a grasp (0: off) */
   double pass_depth;        /* m: contacts deeper than this do not begin a grasp (a pass-through; 0: off) */
+  double slip_distance;     /* m: a hand this far past a held body static geometry stopped: its grip slips */
   int32_t velocity_window;
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
 } handsim_grasp_settings;

@@ -183,6 +183,7 @@ namespace Handsim
         public double OpeningDistance;
         public double SqueezeDistance;
         public double PassDepth;
+        public double SlipDistance;
         public int VelocityWindow;
         public int AcrossParts;  // bool
 

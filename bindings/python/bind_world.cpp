@@ -94,6 +94,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("opening_distance", &GraspSettings::opening_distance)
       .def_readwrite("squeeze_distance", &GraspSettings::squeeze_distance)
       .def_readwrite("pass_depth", &GraspSettings::pass_depth)
+      .def_readwrite("slip_distance", &GraspSettings::slip_distance)
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
       .def_readwrite("velocity_window", &GraspSettings::velocity_window)

@@ -151,6 +151,7 @@ void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) 
   validate::in_range(s.squeeze_distance, 0, 1, prefix + "squeeze_distance", "m");
   validate::in_range(s.pass_depth, 0, 1, prefix + "pass_depth", "m");
   validate::in_range(s.release_distance, 0, 1, prefix + "release_distance", "m");
+  validate::in_range(s.slip_distance, 0, 1, prefix + "slip_distance", "m");
   validate::in_range(s.tracking_grace_s, 0, 3600, prefix + "tracking_grace_s", "s");
   if (s.velocity_window < 2 || s.velocity_window > 1000)
     validate::fail(prefix + "velocity_window", "must be in 2..1000 frames, got " + std::to_string(s.velocity_window));
@@ -412,6 +413,15 @@ Vec3 capped_speed(const Vec3& v) {
   const double n = v.norm();
   return n > validate::kMaxSpeed ? Vec3(v * (validate::kMaxSpeed / n)) : v;
 }
+// A held body that static geometry pushed back by `pushed` does not move on into it: the part of its velocity
+// into the surface is taken out, the part along it kept (it slides with the hand).
+BodyVelocity stopped_velocity(BodyVelocity v, const Vec3& pushed) {
+  const double n = pushed.norm();
+  if (n == 0) return v;
+  const Vec3 out = pushed / n;
+  v.linear -= std::min(0.0, v.linear.dot(out)) * out;
+  return v;
+}
 }  // namespace
 
 // The span a hand must have closed by lately to begin a grasp; 0 (off) is met by any hand.
@@ -572,9 +582,10 @@ void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool z
     // released body starts from the hand's current pose (with the velocity of that point), and a body handed
     // over starts from there too.
     const HandSlot& h = hands[hi];
-    b.pose = h.palm * b.grasp.primary_relative;
+    Vec3 pushed;
+    b.pose = held_pose(b, &pushed);
     if (!b.grasp.secondary.is_null()) hand_over(b);
-    else release(b, zero_velocity ? BodyVelocity{} : h.history.attached_body_velocity(b.pose.position));
+    else release(b, zero_velocity ? BodyVelocity{} : stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed));
   }
   events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
 }
@@ -610,15 +621,17 @@ void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
     events.push_back({EventType::ContactEnd, hand_id(hi), body_id(bi)});
 }
 
-// --- lines 10, 14: a grasped object keeps its pose relative to its primary hand ---
+// --- lines 10, 14: a grasped object keeps its pose relative to its primary hand (stopped by static geometry:
+// static_stop.cpp) ---
 StageReport World::Impl::follow_primary_hands() {
   int following = 0;
   for (uint32_t bi : held_bodies()) {
     Body& b = bodies[bi];
     if (b.jointed() || b.soft_joint >= 0) continue;
     const HandSlot& h = hands[b.grasp.primary.index];
-    b.pose = h.palm * b.grasp.primary_relative;
-    const BodyVelocity v = h.history.attached_body_velocity(b.pose.position);
+    Vec3 pushed;
+    b.pose = held_pose(b, &pushed);
+    const BodyVelocity v = stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed);
     b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
     b.angular = capped_speed(v.angular);
     ++following;

@@ -120,6 +120,12 @@ struct HandSlot {
   uint64_t bullet_version = 0;
 };
 
+// One way a held body is inside static geometry (static_stop.cpp).
+struct StaticStop {
+  Vec3 normal;   // push the held body along this (unit) ...
+  double depth;  // ... by this much to take one of its points out
+};
+
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
 struct HandBodyPair {
   GraspTracker tracker;
@@ -252,6 +258,14 @@ struct World::Impl {
                     std::vector<int>& parts) const;
   double closing_needed() const;
   StageReport follow_primary_hands();
+  // A held body stopped by static geometry (static_stop.cpp): where it is this frame (palm * T_rel pushed out of
+  // the ground and static bodies; T_rel re-taken when the grip slips), with the push in `pushed`.
+  Pose held_pose(Body& b, Vec3* pushed = nullptr);
+  Vec3 static_push(const Body& held, const Pose& pose);
+  void static_stops(const Body& held, const Pose& pose, std::vector<StaticStop>& out);
+  std::vector<StaticStop> scratch_stops;  // scratch of static_push
+  std::vector<ParticleContact> scratch_stop_contacts;
+  Eigen::Matrix3Xd scratch_stop_points, scratch_stop_theirs;
   StageReport fit_touched_bodies(double dt);
   StageReport simulate(double dt);
   StageReport solve_joints(double dt);

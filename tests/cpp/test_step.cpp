@@ -126,9 +126,18 @@ struct Scene {
   Pinch pinch;
   Pose rest;
   std::vector<Event> log;
+  double dt = kDt;
 
-  explicit Scene(const WorldDef& def = {}) : world(def) {
+  // `table`: a static 60 x 10 x 60 cm box whose top is at y = 0 stands in for the ground (the world has none).
+  explicit Scene(const WorldDef& def = {}, bool table = false) : world(table ? without_ground(def) : def) {
     hand = world.add_hand(HandDef{});
+    if (table) {
+      BodyDef t;
+      t.shape = ShapeDef::box(Vec3(0.3, 0.05, 0.3));
+      t.mass = 0;
+      t.pose.position = Vec3(0, -0.05, 0);
+      world.add_body(t);
+    }
     box = world.add_body(cube(Vec3(0, kHalf, 0)));
     for (int i = 0; i < 30; ++i) world.step(kDt);
     pinch = make_pinch(world.hand_model(hand));
@@ -137,8 +146,12 @@ struct Scene {
   double hold() const { return pinch.touch + 0.003; }
   double open() const { return pinch.touch - 0.02; }
 
+  static WorldDef without_ground(WorldDef def) {
+    def.ground = false;
+    return def;
+  }
   void step(const std::vector<HandFrame>& frames) {
-    world.step(kDt, frames);
+    world.step(dt, frames);
     for (const Event& e : world.events()) log.push_back(e);
   }
   // Comes down from 10 cm above with the thumb open.
@@ -823,6 +836,107 @@ TEST(Step, SetBodyPoseOnAHeldBodyKeepsItHeldThere) {
   ASSERT_EQ(count(s.world.events(), EventType::GraspEnd), 1);
   EXPECT_EQ(s.log.back().reason, EventReason::Released);
   EXPECT_EQ(s.world.body_motion(s.box), BodyMotion::Dynamic);
+}
+
+// How deep the 4 cm cube at `box` is below y = 0 (the ground, or the top of Scene's table): its lowest corner.
+double below_zero(const Pose& box) {
+  double lowest = 1e9;
+  for (int c = 0; c < 8; ++c)
+    lowest = std::min(lowest, box.transform(kHalf * Vec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1)).y());
+  return std::max(0.0, -lowest);
+}
+
+// A pinch-held cube pressed into static geometry (issue 20 item 3, docs/grasp.md "Static geometry"), stepped at
+// `dt` after a 60 Hz grasp: the hand goes `depth` below where it took the cube off the surface over 0.5 s, stays
+// there 0.25 s (moving by `sideways` meanwhile), then rises to 10 cm above it over 0.5 s and stays 0.25 s.
+struct Press {
+  double deepest = 0;          // the cube's deepest penetration of the surface over every frame (m)
+  double deepest_held = 0;     // ... over the frames it was held in
+  bool held_down = false;      // grasped at the end of the pressing
+  Vec3 slid = Vec3::Zero();    // how far the cube went while pressed
+  int ends = 0, begins = 0;    // GraspEnd / GraspBegin events after the first grasp
+  EventReason reason = EventReason::None;  // of the first GraspEnd
+  bool held_up = false;        // grasped at the end
+  double height = 0;           // the cube centre's final height (m)
+};
+
+Press press(bool table, double dt, double depth, const Vec3& sideways = Vec3::Zero()) {
+  Scene s(WorldDef{}, table);
+  s.grasp();
+  Press out;
+  if (!s.world.body_grasp(s.box).grasped) return out;
+  const size_t logged = s.log.size();
+  s.dt = dt;
+  const int n = int(std::lround(0.5 / dt)), m = int(std::lround(0.25 / dt));
+  auto hand_at = [&](double down, const Vec3& along) {
+    s.step({s.pinch.frame(translation(along - Vec3(0, down, 0)) * s.rest, s.hold())});
+    const double below = below_zero(s.world.body_pose(s.box));
+    out.deepest = std::max(out.deepest, below);
+    if (s.world.body_grasp(s.box).grasped) out.deepest_held = std::max(out.deepest_held, below);
+  };
+  for (int i = 1; i <= n; ++i) hand_at(depth * smoothstep(double(i) / n), Vec3::Zero());
+  const Vec3 x0 = s.world.body_pose(s.box).position;
+  for (int i = 1; i <= m; ++i) hand_at(depth, sideways * smoothstep(double(i) / m));
+  out.held_down = s.world.body_grasp(s.box).grasped;
+  out.slid = s.world.body_pose(s.box).position - x0;
+  for (int i = 1; i <= n; ++i) hand_at(depth - (depth + 0.1) * smoothstep(double(i) / n), sideways);
+  for (int i = 1; i <= m; ++i) hand_at(-0.1, sideways);
+  for (size_t k = logged; k < s.log.size(); ++k) {
+    if (s.log[k].type == EventType::GraspEnd && out.ends++ == 0) out.reason = s.log[k].reason;
+    out.begins += s.log[k].type == EventType::GraspBegin;
+  }
+  out.held_up = s.world.body_grasp(s.box).grasped;
+  out.height = s.world.body_pose(s.box).position.y();
+  return out;
+}
+
+// Pressed 5 cm on into the ground or a static table, the held cube stays on the surface (<= 2 mm in, every frame, at
+// 30, 60 and 120 Hz alike); the fingers slip down its faces until they slide off and eq. 3 lets it go (Released);
+// coming back up, the pinch closes on it again and lifts it.
+TEST(Step, HeldCubePressedIntoStaticGeometryStopsOnIt) {
+  for (bool table : {false, true})
+    for (double hz : {30.0, 60.0, 120.0}) {
+      const Press p = press(table, 1 / hz, 0.05);
+      const std::string what = std::string(table ? "table" : "ground") + " at " + std::to_string(int(hz)) + " Hz";
+      EXPECT_LE(p.deepest, 0.002) << what;
+      EXPECT_FALSE(p.held_down) << what;
+      EXPECT_EQ(p.ends, 1) << what;
+      EXPECT_EQ(p.reason, EventReason::Released) << what;
+      EXPECT_EQ(p.begins, 1) << what;
+      EXPECT_TRUE(p.held_up) << what;
+      EXPECT_GT(p.height, 0.08) << what;
+    }
+}
+
+// Pressed 1 cm past the ground, the cube stays held; moved 5 cm sideways meanwhile, it slides along the ground with
+// the hand; lifted, it comes up with the hand, held all along (the grip slipped by 5 mm: the hand took it lower).
+TEST(Step, HeldCubePressedOntoTheGroundSlidesAlongItAndLiftsAgain) {
+  for (double hz : {30.0, 60.0, 120.0}) {
+    const Press p = press(false, 1 / hz, 0.01, Vec3(0, 0, 0.05));
+    const std::string what = std::to_string(int(hz)) + " Hz";
+    EXPECT_LE(p.deepest, 0.002) << what;
+    EXPECT_TRUE(p.held_down) << what;
+    EXPECT_LE((p.slid - Vec3(0, 0, 0.05)).norm(), 0.002) << what;
+    EXPECT_EQ(p.ends, 0) << what;
+    EXPECT_TRUE(p.held_up) << what;
+    EXPECT_GT(p.height, 0.08) << what;
+  }
+}
+
+// The figures of docs/grasp.md ("Static geometry"). Not a test; run it with
+//   ./build/dev/tests/cpp/test_step --gtest_also_run_disabled_tests --gtest_filter='*MeasurePressIntoStatic*'
+TEST(Step, DISABLED_MeasurePressIntoStaticGeometry) {
+  std::printf("surface rate_hz press_cm sideways | deepest_mm deepest_held_mm held_pressed slid_cm grasp_ends "
+              "grasp_begins held_lifted height_cm\n");
+  for (bool table : {false, true})
+    for (double depth : {-0.03, 0.01, 0.05})
+      for (const Vec3& side : {Vec3(0, 0, 0.05), Vec3(0.05, 0, 0)})
+        for (double hz : {30.0, 60.0, 120.0}) {
+          const Press p = press(table, 1 / hz, depth, side);
+          std::printf("%s %.0f %.0f %s | %.2f %.2f %d %.2f %d %d %d %.2f\n", table ? "table" : "ground", hz,
+                      depth * 100, side.x() > 0 ? "x" : "z", p.deepest * 1e3, p.deepest_held * 1e3, p.held_down, p.slid.norm() * 100, p.ends, p.begins,
+                      p.held_up, p.height * 100);
+        }
 }
 
 // ---------------------------------------------------------------------------------------------------------

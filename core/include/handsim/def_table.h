@@ -22,6 +22,7 @@
   X(GraspSettings, squeeze_distance)                                                                  \
   X(GraspSettings, pass_depth)                                                                        \
   X(GraspSettings, release_distance)                                                                  \
+  X(GraspSettings, slip_distance)                                                                     \
   X(GraspSettings, tracking_grace_s)                                                                  \
   X(GraspSettings, velocity_window)
 

@@ -69,6 +69,14 @@ struct GraspSettings {
   // surface, since an attached object is no longer penetrated. 0 dropped a lightly held cube
   // under 1.5 mm jitter; 5 mm keeps > 3 sigma of margin for ~1 frame of release latency per 2.5 mm.
   double release_distance = 0.005;
+  // A held body that static geometry (the ground, a body of mass 0) stops stays where it stopped while its hand goes
+  // on past it by up to this (m; docs/grasp.md, "Static geometry"): the hand's skin absorbs it (drawn deformed), and
+  // lifting again brings the body back to where the hand held it. Further, the fingers slip along the body (its pose
+  // relative to the palm is re-taken, the hand staying this far past) until they slide off it and eq. 3 ends the
+  // grasp; the body never goes into the surface or jumps. 5 mm: the band release_distance gives the skin on the other
+  // side (a particle up to 5 mm off a held body still holds it), and the few mm the pulp of a fingertip pressed on a
+  // surface gives before its bone takes the load. 0: the grip slips at once.
+  double slip_distance = 0.005;
   // 0.2 s: typical optical-tracking dropouts (occlusion by the other hand, a finger leaving the view) last
   // a few frames; a hand that is really gone is released within a fifth of a second.
   double tracking_grace_s = 0.2;

@@ -1,0 +1,147 @@
+// A held body stops at static geometry (issue 20 item 3; docs/grasp.md, "Static geometry stops a held body").
+// The attach stage puts a held body at palm * T_rel of its primary hand. A hand that goes on into a table (the
+// tracked hand meets no table) would drive the body through it; instead the body is translated out of the ground
+// and of static bodies (mass 0: tables, fixed bases) along their surface normals only, so it stays on the surface
+// and slides along it with the hand's tangential motion. Only the hand's skin lies between the two: while the hand
+// is at most GraspSettings::slip_distance past the stopped body, T_rel is kept (lifting again brings the body back
+// to where the hand held it); further, the fingers slip along the body (T_rel is re-taken so that the hand stays
+// slip_distance past), until they slide off it and eq. 3 ends the grasp.
+#include "world_impl.h"
+
+#include <algorithm>
+
+namespace handsim {
+namespace {
+
+// Penetration a held body is left in: 0.5 mm. A body Bullet keeps at rest on the ground sinks in by a fraction of a
+// millimetre (its contact solver corrects penetration over substeps rather than all at once), so a body grasped
+// where it rests starts that deep; it is not pushed out by this, which keeps its pose (and the golden state hash)
+// as before when nothing held presses on static geometry. A quarter of the issue's 2 mm bound.
+constexpr double kStaticSlop = 0.0005;
+// Re-queries of the geometry after a push (a push out of one surface can go into another: a corner of the ground
+// and a wall) and projection passes over the stops of one query. A body wedged between surfaces closer than its
+// own size cannot get out of all of them; it keeps the best compromise the passes reach.
+constexpr int kQueries = 3;
+constexpr int kPasses = 8;
+
+// Points that stand for a shape, with the radius of their spheres: a box's corners, edge midpoints and face
+// centres (a table edge passing under the middle of a held box's face meets a face centre); a sphere's centre;
+// a capsule's two cap centres and its middle; the points of a hull or mesh.
+void shape_points(const PreparedShape& ps, const Pose& pose, Eigen::Matrix3Xd& out, double& radius) {
+  const ShapeDef& s = ps.shape;
+  std::vector<Vec3> local;
+  radius = 0;
+  switch (s.type) {
+    case ShapeType::Box:
+      for (int x = -1; x <= 1; ++x)
+        for (int y = -1; y <= 1; ++y)
+          for (int z = -1; z <= 1; ++z)
+            if (x || y || z) local.push_back(s.half_extents.cwiseProduct(Vec3(x, y, z)));
+      break;
+    case ShapeType::Sphere:
+      local.push_back(Vec3::Zero());
+      radius = s.radius;
+      break;
+    case ShapeType::Capsule:
+      for (double y : {-s.half_height, 0.0, s.half_height}) local.push_back(Vec3(0, y, 0));
+      radius = s.radius;
+      break;
+    case ShapeType::ConvexHull: local = ps.hull_vertices; break;
+    case ShapeType::TriangleMesh: local = s.points; break;
+  }
+  out.resize(3, Eigen::Index(local.size()));
+  for (size_t i = 0; i < local.size(); ++i) out.col(Eigen::Index(i)) = pose.transform(local[i]);
+}
+
+// World bounds of a prepared shape at `pose` (the arithmetic of update_box).
+void world_bounds(const PreparedShape& ps, const Pose& pose, Vec3& lo, Vec3& hi) {
+  const Vec3 c = pose.transform(0.5 * (ps.local_lo + ps.local_hi));
+  const Vec3 e = pose.orientation.normalized().toRotationMatrix().cwiseAbs() * (0.5 * (ps.local_hi - ps.local_lo));
+  lo = c - e;
+  hi = c + e;
+}
+
+// The translation that satisfies every stop (normal . t >= depth - slop), by cyclic projection onto their
+// half-spaces: exact for one surface, and for surfaces at right angles (floor and wall) after one pass.
+Vec3 satisfy(const std::vector<StaticStop>& stops) {
+  Vec3 t = Vec3::Zero();
+  for (int pass = 0; pass < kPasses; ++pass) {
+    bool moved = false;
+    for (const StaticStop& s : stops) {
+      const double short_by = s.depth - kStaticSlop - s.normal.dot(t);
+      if (short_by > 0) t += short_by * s.normal, moved = true;
+    }
+    if (!moved) break;
+  }
+  return t;
+}
+
+}  // namespace
+
+// Every way `held` at `pose` is inside static geometry: a direction to push it and how deep it is in.
+void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<StaticStop>& out) {
+  out.clear();
+  Eigen::Matrix3Xd& points = scratch_stop_points;
+  double radius = 0;
+  shape_points(held.prepared, pose, points, radius);
+  if (def.ground)
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      const double depth = def.ground_height - (points(1, i) - radius);
+      if (depth > 0) out.push_back({Vec3::UnitY(), depth});
+    }
+  Vec3 lo, hi;
+  world_bounds(held.prepared, pose, lo, hi);
+  bodies_near(lo, hi, 0, &near_bodies);
+  std::vector<ParticleContact>& contacts = scratch_stop_contacts;
+  for (uint32_t si : near_bodies) {
+    const Body& s = bodies[si];
+    if (!s.alive || s.declared != BodyMotion::Static) continue;
+    contacts.clear();  // the held body's points in the static body
+    collide_particles(points, radius, s.prepared, s.pose, contacts);
+    for (const ParticleContact& c : contacts) out.push_back({c.normal, c.depth});
+    // The static body's points in the held body (a table's corner under a held box), the ones near it only: a
+    // static mesh may have many.
+    Eigen::Matrix3Xd& theirs = scratch_stop_theirs;
+    double their_radius = 0;
+    shape_points(s.prepared, s.pose, theirs, their_radius);
+    Eigen::Index n = 0;
+    for (Eigen::Index i = 0; i < theirs.cols(); ++i)
+      if (((theirs.col(i).array() >= lo.array() - their_radius) && (theirs.col(i).array() <= hi.array() + their_radius)).all())
+        theirs.col(n++) = theirs.col(i);
+    if (n == 0) continue;
+    theirs.conservativeResize(Eigen::NoChange, n);
+    contacts.clear();
+    collide_particles(theirs, their_radius, held.prepared, pose, contacts);
+    for (const ParticleContact& c : contacts) out.push_back({-c.normal, c.depth});
+  }
+}
+
+// The translation that takes `held` at `pose` out of static geometry (zero when it is not in deeper than the slop).
+Vec3 World::Impl::static_push(const Body& held, const Pose& pose) {
+  std::vector<StaticStop>& stops = scratch_stops;
+  Vec3 total = Vec3::Zero();
+  for (int q = 0; q < kQueries; ++q) {
+    static_stops(held, {pose.position + total, pose.orientation}, stops);
+    const Vec3 t = satisfy(stops);
+    if (t.isZero(0)) break;
+    total += t;
+  }
+  return total;
+}
+
+// Where the held body `b` is this frame: palm * T_rel of its primary hand, stopped by static geometry. A hand more
+// than slip_distance past the stopped body has its grip slip along it: T_rel is re-taken.
+Pose World::Impl::held_pose(Body& b, Vec3* pushed) {
+  const HandSlot& h = hands[b.grasp.primary.index];
+  const Pose target = h.palm * b.grasp.primary_relative;
+  const Vec3 t = static_push(b, target);
+  if (pushed) *pushed = t;
+  if (t.isZero(0)) return target;
+  const Pose stopped{target.position + t, target.orientation};
+  const double past = t.norm(), slip = def.grasp.slip_distance;
+  if (past > slip)
+    b.grasp.primary_relative = h.palm.inverse() * Pose{stopped.position - t * (slip / past), target.orientation};
+  return stopped;
+}
+
+}  // namespace handsim
