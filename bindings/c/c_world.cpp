@@ -113,6 +113,27 @@ HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const
   });
 }
 
+HANDSIM_API int HANDSIM_CALL handsim_step_hands(handsim_world* world, double dt, const handsim_hand_input* hands,
+                                                int32_t hand_count) {
+  return guarded([&] {
+    handsim_world& w = checked(world);
+    input_array(hands, hand_count, "hands", "hand_count");
+    // Each live hand has at most one entry, so a longer array repeats or names dead hands: reject a wild
+    // count before converting the frames (the core would name the first repeat, but only afterwards).
+    const size_t live = live_hands(w.world);
+    if (size_t(hand_count) > live)
+      validate::fail("hands", "got " + std::to_string(hand_count) + " entries but the world has " +
+                                  std::to_string(live) + " hands");
+    thread_local std::vector<HandInput> inputs;  // per calling thread, as in handsim_step
+    inputs.resize(size_t(hand_count));
+    for (int32_t k = 0; k < hand_count; ++k) {
+      inputs[size_t(k)].hand = HandId::unpack(hands[k].hand);
+      capi::to_cpp(hands[k].frame, "hands[" + std::to_string(k) + "].frame", inputs[size_t(k)].frame);
+    }
+    w.world.step(dt, inputs);
+  });
+}
+
 static_assert(HANDSIM_STAGE_COUNT == kStageCount, "handsim_step_report.stages has one slot per Stage");
 
 HANDSIM_API int HANDSIM_CALL handsim_last_step(const handsim_world* world, handsim_step_report* out_report) {

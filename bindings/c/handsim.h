@@ -38,9 +38,11 @@
  * 2.2: the typed step report (handsim_step_report, handsim_last_step, HANDSIM_STAGE_*, HANDSIM_SKIP_*,
  * HANDSIM_WARNING_*).
  * 2.3: hands that close onto what they grasp (handsim_open_grip, handsim_closing_grip) and the grasp rules to
- * compare with (handsim_grasp_settings_contacts, handsim_grasp_settings_paper). */
+ * compare with (handsim_grasp_settings_contacts, handsim_grasp_settings_paper).
+ * 2.4: hands addressed by id (handsim_hand_input, handsim_step_hands); handsim_step is deprecated and kept for
+ * this ABI version (a minor bump: nothing existing changed; docs/native.md). */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 3
+#define HANDSIM_ABI_VERSION_MINOR 4
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -303,6 +305,12 @@ typedef struct handsim_hand_frame {
   const handsim_joint_pose* joints; /* joint_count joints in OpenXR order; read during the call only */
 } handsim_hand_frame;
 
+/* One hand's input to handsim_step_hands: the frame that drives the hand `hand`. Since ABI 2.4. */
+typedef struct handsim_hand_input {
+  handsim_hand_id hand;          /* a live hand of this world */
+  handsim_hand_frame frame;
+} handsim_hand_input;
+
 /* A skinned hand mesh for handsim_add_hand_with_mesh (e.g. from glTF): v = sum_k w_k B_bone_k v_bind. */
 typedef struct handsim_skinned_mesh {
   const handsim_vec3* positions; /* vertex_count bind-pose positions */
@@ -475,8 +483,16 @@ HANDSIM_API int HANDSIM_CALL handsim_save_state(handsim_world* world, uint8_t* o
  * world unchanged. Since ABI 2.1. */
 HANDSIM_API int HANDSIM_CALL handsim_restore_state(handsim_world* world, const uint8_t* bytes, int32_t size);
 
-/* One frame of Algorithm 1. hands[i] drives the i-th hand of handsim_hands(); fewer frames than hands leave
- * the rest untracked this frame (hands may be NULL when hand_count is 0). Everything is validated first. */
+/* One frame of Algorithm 1: hands[k].frame drives the hand hands[k].hand; a live hand without an entry is
+ * untracked this frame (hands may be NULL when hand_count is 0). A null, removed or unknown id is
+ * HANDSIM_STALE_ID and a hand given twice HANDSIM_INVALID_ARGUMENT, both naming "hands[k].hand"; a bad frame
+ * names "hands[k].frame.<field>". Everything is validated first. Since ABI 2.4. */
+HANDSIM_API int HANDSIM_CALL handsim_step_hands(handsim_world* world, double dt, const handsim_hand_input* hands,
+                                                int32_t hand_count);
+/* Deprecated since ABI 2.4, kept for this ABI version: hands[i] drives the i-th hand of handsim_hands() (fewer
+ * frames than hands leave the rest untracked). A removed hand's slot goes to the next added hand, which then
+ * takes the removed one's place in that order, so a frame meant for one hand can drive another; use
+ * handsim_step_hands. Errors name "hands[i].<field>". */
 HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const handsim_hand_frame* hands,
                                           int32_t hand_count);
 /* What the last step did (all zero before the first step). Since ABI 2.2. */
@@ -559,7 +575,7 @@ HANDSIM_API int HANDSIM_CALL handsim_add_hand_with_mesh(handsim_world* world, co
 HANDSIM_API int HANDSIM_CALL handsim_remove_hand(handsim_world* world, handsim_hand_id hand);
 HANDSIM_API int HANDSIM_CALL handsim_contains_hand(const handsim_world* world, handsim_hand_id hand,
                                                    int32_t* out_alive);
-/* The hands in the order handsim_step's frames drive them. */
+/* The live hands, in slot order (the order the deprecated handsim_step's frames drive them). */
 HANDSIM_API int HANDSIM_CALL handsim_hands(const handsim_world* world, handsim_hand_id* out_hands,
                                            int32_t capacity, int32_t* count);
 HANDSIM_API int HANDSIM_CALL handsim_get_hand_info(const handsim_world* world, handsim_hand_id hand,

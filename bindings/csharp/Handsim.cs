@@ -430,6 +430,14 @@ namespace Handsim
         public IntPtr Joints;
     }
 
+    /// <summary>One hand's input to a step (handsim_hand_input): the frame that drives the hand Hand.</summary>
+    [StructLayout(LayoutKind.Sequential)]
+    public struct HandInput
+    {
+        public HandId Hand;
+        public HandFrame Frame;
+    }
+
     [StructLayout(LayoutKind.Sequential)]
     public struct SkinnedMesh
     {
@@ -662,6 +670,7 @@ namespace Handsim
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_save_state(WorldHandle world, [Out] byte[] bytes, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_restore_state(WorldHandle world, [In] byte[] bytes, int size);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_step(WorldHandle world, double dt, [In] HandFrame[] hands, int handCount);
+        [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_step_hands(WorldHandle world, double dt, [In] HandInput[] hands, int handCount);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_last_step(WorldHandle world, out StepReport report);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_reports(WorldHandle world, [Out] StageReport[] reports, int capacity, out int count);
         [DllImport(Library, CallingConvention = Cdecl)] public static extern int handsim_stage_summary(WorldHandle world, [Out] byte[] text, int capacity, out int length);
@@ -761,8 +770,12 @@ namespace Handsim
     /// <summary>One hand's input for World.Step: its handedness and 26 joints (OpenXR order), reused every frame.</summary>
     public sealed class TrackedHand
     {
+        /// <summary>The hand this frame drives (World.StepHands); AddHand's id.</summary>
+        public HandId Hand;
         public HandSide Handedness;
         public readonly JointPose[] Joints = new JointPose[Native.HandJointCount];
+        public TrackedHand(HandId hand, HandSide handedness) { Hand = hand; Handedness = handedness; }
+        /// <summary>Without a hand id: only for the deprecated World.Step(dt, hands), which goes by position.</summary>
         public TrackedHand(HandSide handedness) { Handedness = handedness; }
     }
 
@@ -771,6 +784,7 @@ namespace Handsim
     {
         readonly WorldHandle handle;
         HandFrame[] frames = new HandFrame[0];
+        HandInput[] inputs = new HandInput[0];
         GCHandle[] pins = new GCHandle[0];
         readonly TrackedHand[] one = new TrackedHand[1], two = new TrackedHand[2];  // Step's allocation-free overloads
 
@@ -808,28 +822,54 @@ namespace Handsim
         // --- stepping ---
 
         /// <summary>One frame with no tracked hands.</summary>
-        public void Step(double dt) { Native.Check(Native.handsim_step(handle, dt, null, 0), "handsim_step"); }
+        public void Step(double dt) { StepHands(dt, (TrackedHand[])null); }
 
-        /// <summary>One frame driving the first hand (the others untracked). Unlike Step(dt, params ...) with one
-        /// argument, it allocates nothing: a frame loop calls this, or passes an array it keeps.</summary>
-        public void Step(double dt, TrackedHand hand)
+        /// <summary>One frame: hand.Joints drive the hand hand.Hand (the others untracked). Unlike
+        /// StepHands(dt, params ...) with one argument, it allocates nothing: a frame loop calls this, or passes an
+        /// array it keeps.</summary>
+        public void StepHands(double dt, TrackedHand hand)
         {
             one[0] = hand;
-            try { Step(dt, one); }
+            try { StepHands(dt, one); }
             finally { one[0] = null; }
         }
 
-        /// <summary>One frame driving the first two hands; allocates nothing (see Step(dt, hand)).</summary>
-        public void Step(double dt, TrackedHand first, TrackedHand second)
+        /// <summary>One frame driving two hands, each the one its Hand names; allocates nothing (see
+        /// StepHands(dt, hand)).</summary>
+        public void StepHands(double dt, TrackedHand first, TrackedHand second)
         {
             two[0] = first; two[1] = second;
-            try { Step(dt, two); }
+            try { StepHands(dt, two); }
             finally { two[0] = two[1] = null; }
         }
 
-        /// <summary>One frame: hands[i] drives the i-th hand of Hands() (fewer: the rest are untracked). Pins each
-        /// hand's joints for the call; allocates nothing once the world has seen this many hands.</summary>
+        /// <summary>One frame: each hands[k] drives the hand hands[k].Hand; live hands without an entry are
+        /// untracked. A stale or repeated id throws naming hands[k].hand, a bad frame hands[k].frame.&lt;field&gt;.
+        /// Pins each hand's joints for the call; allocates nothing once the world has seen this many hands.</summary>
+        public void StepHands(double dt, params TrackedHand[] hands)
+        {
+            int n = Pin(hands);
+            if (inputs.Length < n) inputs = new HandInput[n];
+            try
+            {
+                for (int i = 0; i < n; ++i) inputs[i] = new HandInput { Hand = hands[i].Hand, Frame = frames[i] };
+                Native.Check(Native.handsim_step_hands(handle, dt, inputs, n), "handsim_step_hands");
+            }
+            finally { Unpin(n); }
+        }
+
+        /// <summary>Deprecated (kept for one version): hands[i] drives the i-th hand of Hands(), which a removed
+        /// and re-added hand reorders, so a frame can drive another hand than meant; use StepHands.</summary>
+        [Obsolete("Step(dt, hands) goes by the order of Hands(); use StepHands, whose frames name their hand")]
         public void Step(double dt, params TrackedHand[] hands)
+        {
+            int n = Pin(hands);
+            try { Native.Check(Native.handsim_step(handle, dt, frames, n), "handsim_step"); }
+            finally { Unpin(n); }
+        }
+
+        // Pins each hand's joints into frames[i] for one call; returns the count. Unpin(n) releases them.
+        int Pin(TrackedHand[] hands)
         {
             int n = hands == null ? 0 : hands.Length;
             for (int i = 0; i < n; ++i)
@@ -843,12 +883,14 @@ namespace Handsim
                     frames[i] = new HandFrame { Handedness = hands[i].Handedness, JointCount = hands[i].Joints.Length,
                                                 Joints = pins[i].AddrOfPinnedObject() };
                 }
-                Native.Check(Native.handsim_step(handle, dt, frames, n), "handsim_step");
             }
-            finally
-            {
-                for (int i = 0; i < n; ++i) if (pins[i].IsAllocated) pins[i].Free();
-            }
+            catch { Unpin(n); throw; }
+            return n;
+        }
+
+        void Unpin(int n)
+        {
+            for (int i = 0; i < n; ++i) if (pins[i].IsAllocated) pins[i].Free();
         }
 
         /// <summary>What the last step did: per stage its cost and work or skip reason, and the warnings.</summary>

@@ -22,7 +22,7 @@ int main(void) {
   handsim_hand_id hand;
   handsim_hand_pose_params pinch, shape;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
-  handsim_hand_frame frame;
+  handsim_hand_input input; /* the frame and the hand it drives */
   uint64_t hash = 0;
   int i;
 
@@ -35,9 +35,10 @@ int main(void) {
   CHECK(handsim_build_jewelry_box(world, NULL, &box));
   CHECK(handsim_add_hand(world, NULL, &hand));
   CHECK(handsim_lid_pinch_shape(&pinch));
-  frame.handedness = HANDSIM_RIGHT;
-  frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
-  frame.joints = joints;
+  input.hand = hand;
+  input.frame.handedness = HANDSIM_RIGHT;
+  input.frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  input.frame.joints = joints;
 
   printf("frame  time_s  hand_deg  lid_deg  grasped\n");
   for (i = 0; i <= 140; ++i) {
@@ -51,7 +52,7 @@ int main(void) {
     CHECK(handsim_closing_grip(&pinch, i * dt, 0.25, &shape));
     CHECK(handsim_jewelry_box_lid_pinch_palm(world, &box, HANDSIM_RIGHT, hand_angle, 0.0, &palm));
     CHECK(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
-    CHECK(handsim_step(world, dt, &frame, 1));
+    CHECK(handsim_step_hands(world, dt, &input, 1));
     CHECK(handsim_get_joint_state(world, box.hinge, &hinge));
     CHECK(handsim_body_grasp(world, box.lid, &grasp));
     if (i % 10 == 0)

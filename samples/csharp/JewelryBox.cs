@@ -14,8 +14,7 @@ static class JewelryBoxSample
         using (var world = new World())
         {
             JewelryBox box = world.BuildJewelryBox();
-            world.AddHand(HandDef.Default);
-            var hand = new TrackedHand(HandSide.Right);
+            var hand = new TrackedHand(world.AddHand(HandDef.Default), HandSide.Right);  // the frame names its hand
             HandPoseParams pinch = HandPoseParams.LidPinch;
             Console.WriteLine("frame  time_s  hand_deg  lid_deg  grasped");
             for (int i = 0; i <= 140; ++i)
@@ -26,7 +25,7 @@ static class JewelryBoxSample
                 double handAngle = t * 80.0 * Math.PI / 180.0;
                 Hands.MakeFrame(HandSide.Right, world.LidPinchPalm(box, HandSide.Right, handAngle), pinch.Closing(i * dt),
                                 hand.Joints);
-                world.Step(dt, hand);
+                world.StepHands(dt, hand);
                 if (i % 10 == 0)
                     Console.WriteLine(string.Format("{0,5}  {1,6:F3}  {2,8:F2}  {3,7:F2}  {4}", i, (i + 1) * dt, handAngle * 180.0 / Math.PI,
                                                     world.JointState(box.Hinge).Value * 180.0 / Math.PI,

@@ -242,22 +242,26 @@ static godot_variant m_open(godot_object* o, void* md, void* ud, int n, godot_va
   return boolean(ok);
 }
 
-/* Unpacks a recorded step into the joints and frames handsim_step takes; returns the number of frames: hands
- * after the last present one get none, absent ones before it an untracked frame (every joint invalid). */
-static int32_t unpack_step(Instance* self, const unsigned char* rec, handsim_hand_frame* frames) {
+/* The input of the session's hand h to handsim_step_hands: its id and its joints (self->joints[h]). */
+static handsim_hand_input hand_input(Instance* self, int32_t h) {
+  handsim_hand_input input;
+  input.hand = self->hands[h];
+  input.frame.handedness = self->handedness[h];
+  input.frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  input.frame.joints = self->joints[h];
+  return input;
+}
+
+/* Unpacks a recorded step into the joints and inputs handsim_step_hands takes; returns the number of inputs: one
+ * per present hand (an absent hand gets none, so it is untracked). */
+static int32_t unpack_step(Instance* self, const unsigned char* rec, handsim_hand_input* inputs) {
   int32_t count = 0;
   for (int32_t h = 0; h < self->hand_count; ++h) {
     const unsigned char* hand = rec + STEP_HEAD + (size_t)h * HAND_BYTES;
-    int present = u32_at(hand) != 0;
+    if (u32_at(hand) == 0) continue;
     memcpy(self->joints[h], hand + 8, sizeof self->joints[h]); /* the record is handsim_joint_pose, byte for byte */
-    for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) {
-      if (!present) self->joints[h][j].valid = 0;
-      self->joints[h][j].reserved = 0;
-    }
-    frames[h].handedness = self->handedness[h];
-    frames[h].joint_count = HANDSIM_HAND_JOINT_COUNT;
-    frames[h].joints = self->joints[h];
-    if (present) count = h + 1;
+    for (int j = 0; j < HANDSIM_HAND_JOINT_COUNT; ++j) self->joints[h][j].reserved = 0;
+    inputs[count++] = hand_input(self, h);
   }
   return count;
 }
@@ -276,9 +280,9 @@ static godot_variant m_step_next(godot_object* o, void* md, void* ud, int n, god
   uint64_t recorded, hash;
   memcpy(&dt, rec, 8);
   memcpy(&recorded, rec + 8, 8);
-  handsim_hand_frame frames[MAX_HANDS];
-  int32_t count = unpack_step(self, rec, frames);
-  if (!check(self, handsim_step(self->world, dt, frames, count), "handsim_step")) return boolean(0);
+  handsim_hand_input inputs[MAX_HANDS];
+  int32_t count = unpack_step(self, rec, inputs);
+  if (!check(self, handsim_step_hands(self->world, dt, inputs, count), "handsim_step_hands")) return boolean(0);
   handsim_state_hash(self->world, &hash);
   if (hash != recorded && self->first_mismatch < 0) self->first_mismatch = self->next;
   self->next++;
@@ -323,7 +327,7 @@ static godot_variant m_create(godot_object* o, void* md, void* ud, int n, godot_
 
 /* One hand's frame from {"positions": PoolVector3Array(26), "rotations": Array of 26 Quat, "radii":
  * PoolRealArray(26) (optional: 0.01 m), "valid": PoolIntArray(26) (optional: all valid)} into self->joints[h].
- * Only the shape is checked here; the values (finite, unit quaternions) are checked by handsim_step. */
+ * Only the shape is checked here; the values (finite, unit quaternions) are checked by handsim_step_hands. */
 static int frame_from(Instance* self, int32_t h, const godot_dictionary* d) {
   enum { J = HANDSIM_HAND_JOINT_COUNT };
   const char* keys[4] = {"positions", "rotations", "radii", "valid"};
@@ -411,7 +415,7 @@ static godot_variant m_step(godot_object* o, void* md, void* ud, int n, godot_va
   int32_t count = (int32_t)api->godot_array_size(&list);
   int ok = count <= self->hand_count;
   if (!ok) fail(self, "step: frames: %d frames for %d hand(s)", count, self->hand_count);
-  handsim_hand_frame frames[MAX_HANDS];
+  handsim_hand_input inputs[MAX_HANDS];
   for (int32_t h = 0; ok && h < count; ++h) {
     godot_variant item = api->godot_array_get(&list, h);
     godot_variant_type t = api->godot_variant_get_type(&item);
@@ -426,12 +430,10 @@ static godot_variant m_step(godot_object* o, void* md, void* ud, int n, godot_va
       ok = 0;
     }
     api->godot_variant_destroy(&item);
-    frames[h].handedness = self->handedness[h];
-    frames[h].joint_count = HANDSIM_HAND_JOINT_COUNT;
-    frames[h].joints = self->joints[h];
+    inputs[h] = hand_input(self, h);  /* frames[h] drives the session's hand h */
   }
   api->godot_array_destroy(&list);
-  ok = ok && check(self, handsim_step(self->world, dt, frames, count), "step");
+  ok = ok && check(self, handsim_step_hands(self->world, dt, inputs, count), "step");
   return boolean(ok);
 }
 

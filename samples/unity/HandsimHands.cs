@@ -74,7 +74,7 @@ public class HandsimHands : MonoBehaviour
             HandDef def = HandDef.Default;
             def.Handedness = hands[h].handedness;
             handIds[h] = world.AddHand(def);
-            input[h] = new TrackedHand(hands[h].handedness);
+            input[h] = new TrackedHand(handIds[h], hands[h].handedness);
             if (hands[h].renderMesh != null)
             {
                 var mesh = new Mesh { indexFormat = UnityEngine.Rendering.IndexFormat.UInt32 };
@@ -129,7 +129,7 @@ public class HandsimHands : MonoBehaviour
             UnityConvert.JointsFromUnity(positions, rotations, hands[h].fromXRHands ? radii : null, valid, input[h].Joints);
         }
 
-        world.Step(Time.deltaTime, input);  // fixed substeps inside: frame-rate independent
+        world.StepHands(Time.deltaTime, input);  // fixed substeps inside: frame-rate independent
 
         // Simulated poses -> Transforms, in one native call.
         if (boundIds.Length > 0)

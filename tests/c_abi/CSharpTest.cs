@@ -79,7 +79,8 @@ static class CSharpTest
         {"handsim_slider_def", typeof(SliderDef)}, {"handsim_ball_def", typeof(BallDef)},
         {"handsim_fixed_def", typeof(FixedDef)}, {"handsim_joint_state", typeof(JointState)},
         {"handsim_hand_def", typeof(HandDef)}, {"handsim_joint_pose", typeof(JointPose)},
-        {"handsim_hand_frame", typeof(HandFrame)}, {"handsim_skinned_mesh", typeof(SkinnedMesh)},
+        {"handsim_hand_frame", typeof(HandFrame)}, {"handsim_hand_input", typeof(HandInput)},
+        {"handsim_skinned_mesh", typeof(SkinnedMesh)},
         {"handsim_hand_info", typeof(HandInfo)}, {"handsim_hand_pose_params", typeof(HandPoseParams)},
         {"handsim_event", typeof(Event)}, {"handsim_stage_report", typeof(StageReport)}, {"handsim_step_stage", typeof(StepStage)},
         {"handsim_step_report", typeof(StepReport)},
@@ -195,7 +196,7 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            var input = new TrackedHand(HandSide.Right);
+            var input = new TrackedHand(hand, HandSide.Right);
             Event[] events = null;
             double maxAngle = double.MinValue, minAngle = double.MaxValue, maxViolation = 0;
             int grasped = 0, graspBegins = 0;
@@ -206,7 +207,7 @@ static class CSharpTest
             {
                 ScenarioHand(world, box, i, input);
                 watch.Restart();
-                world.Step(Dt, input);
+                world.StepHands(Dt, input);
                 watch.Stop();
                 stepSeconds.Add(watch.Elapsed.TotalSeconds);
                 double inStages = 0;
@@ -289,17 +290,17 @@ static class CSharpTest
     static void TestSaveRestore()
     {
         const int saveAt = 80, frames = 300;
-        var input = new TrackedHand(HandSide.Right);
         using (var a = new World())
         using (var b = new World())
         {
             JewelryBox boxA = a.BuildJewelryBox(), boxB = b.BuildJewelryBox();
-            a.AddHand(HandDef.Default);
-            b.AddHand(HandDef.Default);
+            var inputA = new TrackedHand(a.AddHand(HandDef.Default), HandSide.Right);
+            var inputB = new TrackedHand(b.AddHand(HandDef.Default), HandSide.Right);
             Action<World, JewelryBox, int> step = (w, box, i) =>
             {
+                TrackedHand input = w == a ? inputA : inputB;
                 ScenarioHand(w, box, i, input);
-                w.Step(Dt, input);
+                w.StepHands(Dt, input);
             };
             for (int i = 0; i < saveAt; ++i) step(a, boxA, i);
             ulong before = a.StateHash;
@@ -328,30 +329,37 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            var input = new TrackedHand(HandSide.Right);
+            var input = new TrackedHand(hand, HandSide.Right);
             for (int i = 0; i < SwingFrom; ++i)
             {
                 ScenarioHand(world, box, i, input);
-                world.Step(Dt, input);
+                world.StepHands(Dt, input);
             }
             BodyDef def = BodyDef.Default;
             def.Pose.Position = new Vec3(2, 0.5, 2);
             BodyId stale = world.AddBody(def);
             world.RemoveBody(stale);
 
-            Rejects(world, () => world.Step(double.NaN, input), Status.InvalidArgument, "dt: must be finite and > 0, got ");  // C#'s NaN prints as -nan
+            Rejects(world, () => world.StepHands(double.NaN, input), Status.InvalidArgument, "dt: must be finite and > 0, got ");  // C#'s NaN prints as -nan
             Rejects(world, () => world.Step(-Dt), Status.InvalidArgument, "dt: must be finite and > 0");
             Rejects(world, () => world.BodyPose(stale), Status.StaleId, "body: names no live object");
             Rejects(world, () => world.BodyPose(BodyId.Null), Status.StaleId, "body: is the null id");
             Rejects(world, () => world.RemoveHand(new HandId { Value = box.Lid.Value }), Status.StaleId, "hand:");
-            Rejects(world, () => world.Step(Dt, input, input), Status.InvalidArgument, "hands: got 2 frames but the world has 1 hands");
-            var left = new TrackedHand(HandSide.Left);
+            Rejects(world, () => world.StepHands(Dt, input, input), Status.InvalidArgument, "hands: got 2 entries but the world has 1 hands");
+            var left = new TrackedHand(hand, HandSide.Left);
             Array.Copy(input.Joints, left.Joints, input.Joints.Length);
-            Rejects(world, () => world.Step(Dt, left), Status.InvalidArgument, "hands[0].handedness: does not match");
-            var bent = new TrackedHand(HandSide.Right);
+            Rejects(world, () => world.StepHands(Dt, left), Status.InvalidArgument, "hands[0].frame.handedness: does not match");
+            var bent = new TrackedHand(hand, HandSide.Right);
             Array.Copy(input.Joints, bent.Joints, input.Joints.Length);
             bent.Joints[3].Orientation.W = 3;
-            Rejects(world, () => world.Step(Dt, bent), Status.InvalidArgument, "hands[0].joints[3].orientation: quaternion");
+            Rejects(world, () => world.StepHands(Dt, bent), Status.InvalidArgument, "hands[0].frame.joints[3].orientation: quaternion");
+            var nobody = new TrackedHand(new HandId(), HandSide.Right);
+            Array.Copy(input.Joints, nobody.Joints, input.Joints.Length);
+            Rejects(world, () => world.StepHands(Dt, nobody), Status.StaleId, "hands[0].hand: is the null id");
+#pragma warning disable 618  // the deprecated positional Step, kept for one version, still names hands[i]
+            Rejects(world, () => world.Step(Dt, input, input), Status.InvalidArgument, "hands: got 2 frames but the world has 1 hands");
+            Rejects(world, () => world.Step(Dt, left), Status.InvalidArgument, "hands[0].handedness: does not match");
+#pragma warning restore 618
 
             // the raw ABI: null pointers, wrong joint count, too-small buffers
             Rejects(world, () => Native.Check(Native.handsim_step(world.Handle, Dt, null, 1), "handsim_step"),
@@ -393,7 +401,7 @@ static class CSharpTest
             settings.FixedSubstep = 0;
             Rejects(null, () => new World(settings), Status.InvalidArgument, "settings.fixed_substep: must be in [1e-06, 1] s");
 
-            world.Step(Dt, input);  // still steps
+            world.StepHands(Dt, input);  // still steps
             world.Dispose();
             bool disposed = false;
             try { world.Step(Dt); } catch (ObjectDisposedException) { disposed = true; }
@@ -472,9 +480,9 @@ static class CSharpTest
                   " vertices, " + info.ParticleCount + " particles");
             Check(world.HandSourceVertices(custom).Length == 6, "source vertices");
             var palm = new Pose(new Vec3(0, 1, 0), Quat.Identity);
-            var tracked = new TrackedHand(HandSide.Right);
+            var tracked = new TrackedHand(custom, HandSide.Right);
             Hands.MakeFrame(HandSide.Right, palm, HandPoseParams.Default, tracked.Joints);
-            world.Step(Dt, tracked);
+            world.StepHands(Dt, tracked);
             Vec3[] verts = null;
             world.HandRenderVertices(custom, ref verts);
             double minY = double.MaxValue;
@@ -606,7 +614,7 @@ static class CSharpTest
         {
             JewelryBox box = world.BuildJewelryBox();
             HandId hand = world.AddHand(HandDef.Default);
-            var input = new TrackedHand(HandSide.Right);
+            var input = new TrackedHand(hand, HandSide.Right);
             var two = new TrackedHand[] { input };
             BodyId[] bodies = { box.Base, box.Lid };
             var poses = new Pose[2];
@@ -620,7 +628,7 @@ static class CSharpTest
                 for (int k = 0; k < count; ++k, ++frame)
                 {
                     ScenarioHand(world, box, frame % Frames, input);
-                    if (frame % 2 == 0) world.Step(Dt, input); else world.Step(Dt, two);
+                    if (frame % 2 == 0) world.StepHands(Dt, input); else world.StepHands(Dt, two);
                     int n = world.Events(ref events);
                     for (int e = 0; e < n; ++e) sink += (ulong)events[e].Type;
                     world.BodyPoses(bodies, poses);

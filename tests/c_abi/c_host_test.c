@@ -97,21 +97,22 @@ static scenario_result run_scenario(void) {
   handsim_jewelry_box box;
   handsim_hand_id hand = 0;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
-  handsim_hand_frame frame;
+  handsim_hand_input input;
   handsim_event events[16];
   int i;
   MUST(handsim_world_create(NULL, &world));
   MUST(handsim_build_jewelry_box(world, NULL, &box));
   MUST(handsim_add_hand(world, NULL, &hand));
-  frame.handedness = HANDSIM_RIGHT;
-  frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
-  frame.joints = joints;
+  input.hand = hand;
+  input.frame.handedness = HANDSIM_RIGHT;
+  input.frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  input.frame.joints = joints;
   for (i = 0; i < SCENARIO_FRAMES; ++i) {
     handsim_joint_state hinge;
     handsim_grasp_info grasp;
     int32_t n = 0, k;
     scenario_hand(world, &box, i, joints);
-    MUST(handsim_step(world, SCENARIO_DT, &frame, 1));
+    MUST(handsim_step_hands(world, SCENARIO_DT, &input, 1));
     MUST(handsim_get_joint_state(world, box.hinge, &hinge));
     MUST(handsim_body_grasp(world, box.lid, &grasp));
     MUST(handsim_events(world, events, 16, &n));
@@ -390,7 +391,7 @@ typedef struct pinch_world {
   handsim_world* world;
   handsim_jewelry_box box;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
-  handsim_hand_frame frame;
+  handsim_hand_input input;
 } pinch_world;
 
 static void pinch_world_create(pinch_world* p) {
@@ -398,14 +399,15 @@ static void pinch_world_create(pinch_world* p) {
   MUST(handsim_world_create(NULL, &p->world));
   MUST(handsim_build_jewelry_box(p->world, NULL, &p->box));
   MUST(handsim_add_hand(p->world, NULL, &hand));
-  p->frame.handedness = HANDSIM_RIGHT;
-  p->frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
-  p->frame.joints = p->joints;
+  p->input.hand = hand;
+  p->input.frame.handedness = HANDSIM_RIGHT;
+  p->input.frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  p->input.frame.joints = p->joints;
 }
 
 static void pinch_world_step(pinch_world* p, int i) {
   scenario_hand(p->world, &p->box, i, p->joints);
-  MUST(handsim_step(p->world, SCENARIO_DT, &p->frame, 1));
+  MUST(handsim_step_hands(p->world, SCENARIO_DT, &p->input, 1));
 }
 
 static void test_save_restore(void) {
@@ -501,6 +503,42 @@ static void test_step_report(void) {
   MUST(handsim_world_destroy(world));
 }
 
+/* --- hands addressed by id: after remove_hand(a); add_hand(c), c takes a's slot; a frame for b drives b ----- */
+
+static int32_t tracked(const handsim_world* world, handsim_hand_id hand) {
+  handsim_hand_info info;
+  MUST(handsim_get_hand_info(world, hand, &info));
+  return info.tracked;
+}
+
+static void test_hands_by_id(void) {
+  handsim_world* world = NULL;
+  handsim_hand_id a = 0, b = 0, c = 0;
+  handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
+  handsim_pose palm = {{0.3, 0.5, -0.2}, {0, 0, 0, 1}};
+  handsim_hand_input inputs[2];
+  MUST(handsim_world_create(NULL, &world));
+  MUST(handsim_add_hand(world, NULL, &a));
+  MUST(handsim_add_hand(world, NULL, &b));
+  MUST(handsim_remove_hand(world, a));
+  MUST(handsim_add_hand(world, NULL, &c));
+  CHECK((c & 0xffffffffu) == (a & 0xffffffffu), "c reuses a's slot");
+  MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, NULL, joints, HANDSIM_HAND_JOINT_COUNT));
+  inputs[0].hand = b;
+  inputs[0].frame.handedness = HANDSIM_RIGHT;
+  inputs[0].frame.joint_count = HANDSIM_HAND_JOINT_COUNT;
+  inputs[0].frame.joints = joints;
+  MUST(handsim_step_hands(world, SCENARIO_DT, inputs, 1));
+  CHECK(tracked(world, b) && !tracked(world, c), "the frame for b drives b, c has none");
+  g_hash_before = hash_of(world);
+  inputs[1] = inputs[0];
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 2), HANDSIM_INVALID_ARGUMENT, "hands[1].hand: index ");
+  inputs[1].hand = a;
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 2), HANDSIM_STALE_ID, "hands[1].hand: names no live");
+  CHECK(tracked(world, b) && !tracked(world, c), "a refused step changes nothing");
+  MUST(handsim_world_destroy(world));
+}
+
 static void test_bad_inputs(void) {
   handsim_world* world = NULL;
   handsim_world* other = NULL;
@@ -510,6 +548,8 @@ static void test_bad_inputs(void) {
   handsim_hand_pose_params shape;
   handsim_joint_pose joints[HANDSIM_HAND_JOINT_COUNT];
   handsim_hand_frame frames[2];
+  handsim_hand_input inputs[2];
+  handsim_hand_id removed_hand = 0;
   handsim_body_def def;
   handsim_hinge_def hd;
   handsim_ball_def bd;
@@ -536,6 +576,8 @@ static void test_bad_inputs(void) {
   test_hand_outputs(world, hand);
   stale = add_box(world, 1, 2, 0.5, 2);
   MUST(handsim_remove_body(world, stale));
+  MUST(handsim_add_hand(world, NULL, &removed_hand));
+  MUST(handsim_remove_hand(world, removed_hand));
   MUST(handsim_world_create(NULL, &other));
   foreign = add_box(other, 1, 0, 0.5, 0);
   g_hash_before = hash_of(world);
@@ -569,6 +611,29 @@ static void test_bad_inputs(void) {
   joints[7].valid = 0; /* an invalid joint may hold anything */
   joints[7].position.x = NAN;
   MUST(handsim_make_hand_frame(HANDSIM_RIGHT, &palm, &shape, joints, HANDSIM_HAND_JOINT_COUNT));
+  /* the step by id: ids are checked first, then each frame */
+  inputs[0].hand = hand;
+  inputs[0].frame = frames[0];
+  inputs[1] = inputs[0];
+  REJECT(world, handsim_step_hands(world, NAN, inputs, 1), HANDSIM_INVALID_ARGUMENT, "dt: must be finite and > 0");
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, NULL, 1), HANDSIM_INVALID_ARGUMENT, "hands: must not be null");
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, -1), HANDSIM_INVALID_ARGUMENT,
+         "hand_count: must be >= 0");
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 2), HANDSIM_INVALID_ARGUMENT,
+         "hands: got 2 entries but the world has 1 hands");
+  inputs[0].hand = 0;
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 1), HANDSIM_STALE_ID, "hands[0].hand: is the null id");
+  inputs[0].hand = removed_hand;
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 1), HANDSIM_STALE_ID,
+         "hands[0].hand: names no live object");
+  inputs[0].hand = hand;
+  inputs[0].frame.joint_count = 25;
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 1), HANDSIM_INVALID_ARGUMENT,
+         "hands[0].frame.joint_count: must be 26");
+  inputs[0].frame = frames[0];
+  inputs[0].frame.handedness = HANDSIM_LEFT;
+  REJECT(world, handsim_step_hands(world, SCENARIO_DT, inputs, 1), HANDSIM_INVALID_ARGUMENT,
+         "hands[0].frame.handedness: does not match");
 
   /* ids */
   REJECT(world, handsim_body_pose(world, stale, &pose), HANDSIM_STALE_ID, "body: names no live object");
@@ -856,6 +921,7 @@ int main(int argc, char** argv) {
   test_scenario(argv[1], argc > 2 ? argv[2] : NULL);
   test_shapes_and_joints();
   test_step_report();
+  test_hands_by_id();
   test_bad_inputs();
   test_save_restore();
   printf("%d checks, %d failures\n", g_checks, g_failures);

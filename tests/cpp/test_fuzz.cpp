@@ -259,9 +259,23 @@ class Fuzzer {
     if (chance(0.01) && !frames.empty()) frames[0].handedness = Handedness::Left;
     ++steps_;
     bool accepted = false;
-    attempt([&] { world_.step(dt, frames); accepted = true; }, "step");
+    if (steps_ % 2 == 0) {
+      attempt([&] { world_.step(dt, frames); accepted = true; }, "step (deprecated positional)");
+    } else {
+      // By id, without another random draw (so the run's sequence of calls is the positional one's): the k-th
+      // frame names the k-th live hand, a frame beyond them the last removed hand (stale) or the null id.
+      const std::vector<HandInput> inputs = by_id(frames);
+      attempt([&] { world_.step(dt, inputs); accepted = true; }, "step");
+    }
     if (accepted)
       for (const Event& e : world_.events()) grasps_ += e.type == EventType::GraspBegin;
+  }
+
+  std::vector<HandInput> by_id(const std::vector<HandFrame>& frames) const {
+    const std::vector<HandId> live = world_.hands();
+    std::vector<HandInput> inputs;
+    for (size_t k = 0; k < frames.size(); ++k) inputs.push_back({k < live.size() ? live[k] : removed_hand_, frames[k]});
+    return inputs;
   }
 
   void edit_body() {
@@ -341,7 +355,7 @@ class Fuzzer {
         attempt([&] { hand = world_.add_hand(d); }, "add_hand (extreme)");
         if (!hand) break;
         step();
-        attempt([&] { world_.remove_hand(*hand); }, "remove_hand");
+        attempt([&] { world_.remove_hand(*hand); removed_hand_ = *hand; }, "remove_hand");
         break;
       }
       case 2: {
@@ -493,6 +507,7 @@ class Fuzzer {
   long rejected_ = 0;
   long calls_ = 0;
   long steps_ = 0;
+  HandId removed_hand_;  // the last hand removed: a stale id for step's by-id form
   long grasps_ = 0;
   const char* last_op_ = "";
 };

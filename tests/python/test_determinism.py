@@ -28,7 +28,7 @@ def run_two_hand_scenario(frames):
     world.add_hand(handsim.HandDef())
     world.add_hand(handsim.HandDef(handedness=handsim.Handedness.LEFT))
     for i in range(frames):
-        world.step(1 / 60, handsim.scenario_frames(box, world, i))
+        world.step(1 / 60, dict(zip(world.hands(), handsim.scenario_frames(box, world, i))))  # hands(): right, left
     return world.state_hash()
 
 
@@ -61,10 +61,10 @@ def test_python_driver_matches_the_c_abi_host(tmp_path):
 
     world = handsim.World()
     box = handsim.build_jewelry_box(world)
-    world.add_hand(handsim.HandDef())
+    hand = world.add_hand(handsim.HandDef())
     pinch = handsim.lid_pinch_shape()
     for i in range(160):  # SCENARIO_FRAMES of scenario.h
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, c_abi_scenario_angle(i), 0.0)
         shape = handsim.closing_grip(pinch, i * (1.0 / 60.0), 0.25)  # scenario_grip_t, SCENARIO_CLOSING_S
-        world.step(1.0 / 60.0, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
+        world.step(1.0 / 60.0, {hand: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)})
     assert world.state_hash() == native, f"Python 0x{world.state_hash():016x} vs C ABI host 0x{native:016x}"

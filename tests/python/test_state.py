@@ -26,7 +26,7 @@ def build():
 def run(world, box, start, count):
     hashes = []
     for i in range(start, start + count):
-        world.step(1 / 60, handsim.scenario_frames(box, world, i))
+        world.step(1 / 60, dict(zip(world.hands(), handsim.scenario_frames(box, world, i))))  # no hand removed: hands() is right, left
         hashes.append(world.state_hash())
     return hashes
 

@@ -45,7 +45,8 @@ class Scene:
         return handsim.make_hand_frame(handedness, palm, params=handsim.closing_grip(self.shape, since))
 
     def step(self, frames=(), dt=DT):
-        self.world.step(dt, list(frames))
+        """frames[k] drives self.hands[k]."""
+        self.world.step(dt, dict(zip(self.hands, frames)))
         self.time += dt
         self.check()
 

@@ -44,7 +44,7 @@ def test_many_threads_hammer_one_world():
     def stepper():
         for _ in range(frames):
             i = next(counter)
-            world.step(1 / 60, handsim.scenario_frames(box, world, i % 600))
+            world.step(1 / 60, dict(zip(world.hands(), handsim.scenario_frames(box, world, i % 600))))
 
     def editor():
         mine = []
@@ -89,7 +89,7 @@ def test_several_worlds_step_in_parallel_and_match_one_alone():
     def run(out, k):
         world, box = _two_hand_world()
         for i in range(150):
-            world.step(1 / 60, handsim.scenario_frames(box, world, i))
+            world.step(1 / 60, dict(zip(world.hands(), handsim.scenario_frames(box, world, i))))
         out[k] = world.state_hash()
 
     alone = {}
@@ -126,7 +126,7 @@ def test_reset_mid_grasp_emits_grasp_end():
     world, box = _two_hand_world(particles=1182)
     grasped = False
     for i in range(400):
-        world.step(1 / 60, handsim.scenario_frames(box, world, i))
+        world.step(1 / 60, dict(zip(world.hands(), handsim.scenario_frames(box, world, i))))
         if world.body_grasp(box.lid).grasped:
             grasped = True
             break
