@@ -29,28 +29,31 @@ constexpr int kPasses = 8;
 // a capsule's two cap centres and its middle; the points of a hull or mesh.
 void shape_points(const PreparedShape& ps, const Pose& pose, Eigen::Matrix3Xd& out, double& radius) {
   const ShapeDef& s = ps.shape;
-  std::vector<Vec3> local;
-  radius = 0;
+  const std::vector<Vec3>& listed = s.type == ShapeType::ConvexHull ? ps.hull_vertices : s.points;
+  const Eigen::Index n = s.type == ShapeType::Box       ? 26
+                         : s.type == ShapeType::Sphere  ? 1
+                         : s.type == ShapeType::Capsule ? 3
+                                                        : Eigen::Index(listed.size());
+  out.resize(3, n);  // reallocates only when the count changes
+  radius = s.type == ShapeType::Sphere || s.type == ShapeType::Capsule ? s.radius : 0.0;
+  Eigen::Index k = 0;
+  auto put = [&](const Vec3& local) { out.col(k++) = pose.transform(local); };
   switch (s.type) {
     case ShapeType::Box:
       for (int x = -1; x <= 1; ++x)
         for (int y = -1; y <= 1; ++y)
           for (int z = -1; z <= 1; ++z)
-            if (x || y || z) local.push_back(s.half_extents.cwiseProduct(Vec3(x, y, z)));
+            if (x || y || z) put(s.half_extents.cwiseProduct(Vec3(x, y, z)));
       break;
-    case ShapeType::Sphere:
-      local.push_back(Vec3::Zero());
-      radius = s.radius;
-      break;
+    case ShapeType::Sphere: put(Vec3::Zero()); break;
     case ShapeType::Capsule:
-      for (double y : {-s.half_height, 0.0, s.half_height}) local.push_back(Vec3(0, y, 0));
-      radius = s.radius;
+      for (double y : {-s.half_height, 0.0, s.half_height}) put(Vec3(0, y, 0));
       break;
-    case ShapeType::ConvexHull: local = ps.hull_vertices; break;
-    case ShapeType::TriangleMesh: local = s.points; break;
+    case ShapeType::ConvexHull:
+    case ShapeType::TriangleMesh:
+      for (const Vec3& p : listed) put(p);
+      break;
   }
-  out.resize(3, Eigen::Index(local.size()));
-  for (size_t i = 0; i < local.size(); ++i) out.col(Eigen::Index(i)) = pose.transform(local[i]);
 }
 
 // World bounds of a prepared shape at `pose` (the arithmetic of update_box).
@@ -104,14 +107,16 @@ void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<S
     Eigen::Matrix3Xd& theirs = scratch_stop_theirs;
     double their_radius = 0;
     shape_points(s.prepared, s.pose, theirs, their_radius);
-    Eigen::Index n = 0;
-    for (Eigen::Index i = 0; i < theirs.cols(); ++i)
-      if (((theirs.col(i).array() >= lo.array() - their_radius) && (theirs.col(i).array() <= hi.array() + their_radius)).all())
-        theirs.col(n++) = theirs.col(i);
-    if (n == 0) continue;
-    theirs.conservativeResize(Eigen::NoChange, n);
+    std::vector<std::pair<int, int>>& ranges = scratch_stop_ranges;
+    ranges.clear();
+    for (int i = 0; i < int(theirs.cols()); ++i)
+      if (((theirs.col(i).array() >= lo.array() - their_radius) && (theirs.col(i).array() <= hi.array() + their_radius)).all()) {
+        if (ranges.empty() || ranges.back().second != i) ranges.push_back({i, i + 1});
+        else ++ranges.back().second;
+      }
+    if (ranges.empty()) continue;
     contacts.clear();
-    collide_particles(theirs, their_radius, held.prepared, pose, contacts);
+    collide_particle_ranges(theirs, ranges, their_radius, held.prepared, pose, contacts);
     for (const ParticleContact& c : contacts) out.push_back({-c.normal, c.depth});
   }
 }

@@ -266,6 +266,7 @@ struct World::Impl {
   std::vector<StaticStop> scratch_stops;  // scratch of static_push
   std::vector<ParticleContact> scratch_stop_contacts;
   Eigen::Matrix3Xd scratch_stop_points, scratch_stop_theirs;
+  std::vector<std::pair<int, int>> scratch_stop_ranges;
   StageReport fit_touched_bodies(double dt);
   StageReport simulate(double dt);
   StageReport solve_joints(double dt);

@@ -12,7 +12,7 @@ def pinch_and_press(slip_distance, press):
     """The README's pinch takes the cube off the ground, then the hand goes `press` (m) down past where it took it;
     returns the cube's deepest penetration of the ground (m) and whether it is still held."""
     world = handsim.World(handsim.WorldDef(gravity=[0, -9.81, 0], grasp=handsim.GraspSettings(slip_distance=slip_distance)))
-    world.add_hand(handsim.HandDef(handedness=RIGHT))
+    hand = world.add_hand(handsim.HandDef(handedness=RIGHT))
     pinch = handsim.HandPoseParams(curl=[0.2, 0.3, 0, 0, 0], thumb_opposition=1.0)
     tips = handsim.make_hand_frame(RIGHT, params=pinch).positions[[handsim.THUMB_TIP, handsim.INDEX_TIP]]
     cube = world.add_body(handsim.BodyDef(shape=handsim.Shape.box([HALF] * 3), mass=0.05, pose=[0, HALF, 0, 0, 0, 0, 1]))
@@ -21,7 +21,7 @@ def pinch_and_press(slip_distance, press):
     deepest = 0.0
     for frame in range(15 + 30):
         palm[1] -= press / 30 if frame >= 15 else 0
-        world.step(1 / 60, [handsim.make_hand_frame(RIGHT, palm, params=handsim.closing_grip(pinch, frame / 60))])
+        world.step(1 / 60, {hand: handsim.make_hand_frame(RIGHT, palm, params=handsim.closing_grip(pinch, frame / 60))})
         if frame == 14:
             assert world.body_grasp(cube).grasped
         corners = np.array([[x, y, z] for x in (-HALF, HALF) for y in (-HALF, HALF) for z in (-HALF, HALF)])
