@@ -21,7 +21,7 @@ void collide_particle_ranges(const Eigen::Matrix3Xd& centres, const std::vector<
 // be crossed past their middle in one frame; false for other shapes or u = 0 (keep the nearest face then),
 // and false when that face lies further back than `max_time` along u: the velocity then does not explain how
 // the point got in (the body moved onto a still hand; a noisy estimate), and the far face it names would
-// ask for a push of centimetres.
+// ask for a push of centimetres. `normal` and `offset` are left untouched unless it returns true.
 bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double max_time, Vec3& normal,
                 double& offset);
 
