@@ -40,9 +40,12 @@
  * 2.3: hands that close onto what they grasp (handsim_open_grip, handsim_closing_grip) and the grasp rules to
  * compare with (handsim_grasp_settings_contacts, handsim_grasp_settings_paper).
  * 2.4: hands addressed by id (handsim_hand_input, handsim_step_hands); handsim_step is deprecated and kept for
- * this ABI version (a minor bump: nothing existing changed; docs/native.md). */
+ * this ABI version (a minor bump: nothing existing changed; docs/native.md).
+ * 2.5: handsim_world_settings gained skin_depth and skin_pressure at its end (the contact skin). Like
+ * handsim_grasp_settings' squeeze_distance and pass_depth earlier in 2.x, a layout change made within this
+ * session's 2.x, before any 2.x release, so no older 2.x host exists; after a release it would be a major. */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 4
+#define HANDSIM_ABI_VERSION_MINOR 5
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -155,6 +158,8 @@ typedef struct handsim_world_settings {
   int32_t paper_pipeline;        /* bool: every stage every step, as the paper did (a benchmark baseline) */
   int32_t render_threads;        /* 1..64 threads skin the render mesh when it is read (bit-identical to one) */
   int32_t reserved;
+  double skin_depth;             /* m: a particle's overlap up to this presses the body as finger pulp (0: off) */
+  double skin_pressure;          /* Pa: the pulp's pressure at skin_depth of compression */
 } handsim_world_settings;
 
 /* A collision shape in the body's local frame. */

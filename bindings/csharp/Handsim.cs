@@ -217,6 +217,8 @@ namespace Handsim
         public Bool32 PaperPipeline;
         public int RenderThreads;
         public int Reserved;
+        public double SkinDepth;     // m: a particle's overlap up to this presses the body as finger pulp (0: off)
+        public double SkinPressure;  // Pa: the pulp's pressure at SkinDepth of compression
 
         /// <summary>The C++ defaults (WorldDef{}).</summary>
         public static WorldSettings Default

@@ -117,7 +117,11 @@ void bind_defs(py::module_& m) {
       .def_readwrite("grasp", &WorldDef::grasp)
       .def_readwrite("particle_contacts", &WorldDef::particle_contacts)
       .def_readwrite("render_threads", &WorldDef::render_threads,
-                     "threads skinning the render mesh on read; bit-identical to one thread");
+                     "threads skinning the render mesh on read; bit-identical to one thread")
+      .def_readwrite("skin_depth", &WorldDef::skin_depth,
+                     "m: a particle's overlap up to this is finger pulp pressing the body; 0: off (eq. 2 only)")
+      .def_readwrite("skin_pressure", &WorldDef::skin_pressure,
+                     "Pa: the pulp's pressure at skin_depth of compression (it grows linearly up to it)");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
   flag_property(wd, "ground", &WorldDef::ground, "WorldDef.ground");
   flag_property(wd, "paper_pipeline", &WorldDef::paper_pipeline, "WorldDef.paper_pipeline",

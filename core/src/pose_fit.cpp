@@ -154,6 +154,76 @@ BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_
   return v;
 }
 
+BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
+                        int iterations) {
+  BodyVelocity v = start;
+  std::vector<double> pushed(contacts.size(), 0.0);  // impulse each contact has passed so far (N s)
+  for (int sweep = 0; sweep < iterations; ++sweep) {
+    for (size_t i = 0; i < contacts.size(); ++i) {
+      const SkinContact& c = contacts[i];
+      const Vec3 r = c.point - body.centre;
+      const Vec3 in = -c.normal;  // the direction the pulp pushes the body
+      const Vec3 arm = body.inverse_inertia * r.cross(in);
+      const double response = body.inverse_mass + r.cross(in).dot(arm);  // speed along `in` per N s at the point
+      if (!(response > 0)) continue;  // an immovable body
+      const double speed = (v.linear + v.angular.cross(r)).dot(in);
+      const double total = std::clamp(pushed[i] + (c.needed_speed - speed) / response, 0.0, c.max_impulse);
+      const double impulse = total - pushed[i];
+      pushed[i] = total;
+      v.linear += body.inverse_mass * impulse * in;
+      v.angular += impulse * arm;
+    }
+  }
+  return v;
+}
+
+// A contact within WorldDef::skin_depth as the pulp presses it. It keeps the body from entering the hand
+// further: the body must move away at the hand's own speed into it there (the palm's rigid motion). The pulp
+// does not spring back: it is strongly damped (it recovers over a few hundred ms), so a body lying in it stays
+// where the hand left it instead of being pushed out of a resting hand every frame. The pressure grows
+// linearly with the compression up to skin_pressure at skin_depth (beyond it the bone pushes, eq. 2), over the
+// skin area the particle stands for (hexagonal spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
+SkinContact World::Impl::skin_contact(const ParticleContact& c, const HandSlot& hand, double dt) const {
+  const double spacing = hand.model->particle_spacing;
+  const double area = std::sqrt(3.0) / 2 * spacing * spacing;
+  SkinContact s;
+  s.point = c.point;
+  s.normal = c.normal;
+  s.needed_speed = -hand.history.point_velocity(c.point).dot(c.normal);
+  s.max_impulse = def.skin_pressure * (c.depth / def.skin_depth) * area * dt;
+  return s;
+}
+
+// The body's inverse mass and inertia in the world frame (unit_inertia: principal moments per kg, body frame).
+InverseInertia World::Impl::inverse_inertia(const Body& b) const {
+  InverseInertia inv;
+  inv.centre = b.pose.position;
+  if (!(b.mass > 0)) return inv;
+  inv.inverse_mass = 1 / b.mass;
+  Vec3 moments;
+  for (int k = 0; k < 3; ++k) moments[k] = b.unit_inertia[k] > 0 ? 1 / (b.mass * b.unit_inertia[k]) : 0.0;
+  const Mat3 R = b.pose.orientation.toRotationMatrix();
+  inv.inverse_inertia = R * moments.asDiagonal() * R.transpose();
+  return inv;
+}
+
+// A touched body gets the velocity eq. 2 or the skin gave it for this frame.
+void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt) {
+  if (b.jointed()) {
+    // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
+    b.supported = linear.dot(def.gravity) < 0;
+    // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
+    const double turn = angular.norm() * dt;
+    const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
+    const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
+    project_push(joints[b.hard_joint], simulated, dt);
+    return;
+  }
+  b.linear = linear;
+  b.angular = angular;
+  backend->write(b.backend, b.pose, b.linear, b.angular);
+}
+
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
 // The fitted motion is applied as a velocity over this frame rather than as a teleport: in free space both
 // give the same pose, but with a velocity Bullet still resolves the table and other bodies, so a hand
@@ -169,6 +239,7 @@ BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_
 StageReport World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3>& from = scratch_from;
   std::vector<Vec3>& to = scratch_to;
+  std::vector<SkinContact>& pressed = scratch_pressed;
   std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
   held_groups.clear();
   for (uint32_t bi : held_bodies()) {
@@ -200,37 +271,38 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
     from.clear();
     to.clear();
     BodyVelocity carried;
+    // Only the overlap beyond the skin is bone pushing the body (WorldDef::skin_depth; 0: all of it).
+    const double skin = def.skin_depth;
+    pressed.clear();
     for (size_t e = first; e < end; ++e) {
       const auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
       const size_t before = from.size();
+      const HandSlot& hand = hands[entry.first.first];
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
+        if (c.depth <= skin) {
+          pressed.push_back(skin_contact(c, hand, dt));
+          continue;
+        }
         from.push_back(c.point);
-        to.push_back(c.point - c.normal * c.depth);  // where the surface must go to stop the penetration
+        to.push_back(c.point - c.normal * (c.depth - skin));  // where the surface must go to stop the penetration
       }
-      const BodyVelocity v = hands[entry.first.first].history.attached_body_velocity(b.pose.position);
+      const BodyVelocity v = hand.history.attached_body_velocity(b.pose.position);
       carried.linear += double(from.size() - before) * v.linear;
       carried.angular += double(from.size() - before) * v.angular;
     }
-    if (from.empty()) continue;
-    const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
-    const Vec3 linear = carried.linear / double(from.size()) + correction.linear;
-    const Vec3 angular = carried.angular / double(from.size()) + correction.angular;
-    if (b.jointed()) {
-      // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
-      b.supported = linear.dot(def.gravity) < 0;
-      // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
-      const double turn = angular.norm() * dt;
-      const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
-      const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
-      project_push(joints[b.hard_joint], simulated, dt);
-      ++fitted;
+    if (!from.empty()) {
+      const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
+      push_touched_body(b, carried.linear / double(from.size()) + correction.linear,
+                        carried.angular / double(from.size()) + correction.angular, dt);
+    } else if (!pressed.empty()) {
+      // Only pulp touches the body: it presses, and Bullet weighs the press against the body's support.
+      const BodyVelocity v = skin_press(pressed, inverse_inertia(b), {b.linear, b.angular});
+      push_touched_body(b, v.linear, v.angular, dt);
+    } else {
       continue;
     }
-    b.linear = linear;
-    b.angular = angular;
-    backend->write(b.backend, b.pose, b.linear, b.angular);
     ++fitted;
   }
   for (uint32_t bi : released) bodies[bi].just_released = false;

@@ -71,4 +71,31 @@ Vec3 rotation_vector(const Mat3& R);
 // Throws handsim::Error when dt is not finite and > 0.
 BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_of_mass, double dt);
 
+// One contact of the contact skin (WorldDef::skin_depth): the pulp between a particle and a body presses it along
+// -normal. `needed_speed` (m/s) is the body's speed along -normal at `point` that keeps the overlap from growing
+// (the hand's own speed into the body); `max_impulse` (N s) is what the pulp's pressure passes to the body
+// within the frame.
+struct SkinContact {
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitY();  // outward surface normal, unit
+  double needed_speed = 0;
+  double max_impulse = 0;
+};
+
+// A rigid body's inverse mass properties about its centre of mass, world frame.
+struct InverseInertia {
+  Vec3 centre = Vec3::Zero();
+  double inverse_mass = 0;
+  Mat3 inverse_inertia = Mat3::Zero();
+};
+
+// The body's velocity after the skin's impulses: each contact pushes (never pulls) at its point until the body
+// moves away there at its needed speed, by at most its max_impulse; the contacts share the work by projected
+// Gauss-Seidel over `iterations` sweeps in their given order (deterministic). So a light body is carried along
+// by the hand (not faster: no contact gets more than it needs), a heavy one by no more than the pulp's force,
+// and every impulse acts at its contact point, so a body pressed onto its support gets an impulse its support
+// can take (Bullet's contact solver then cancels it) instead of eq. 2's fitted rotation.
+BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
+                        int iterations = 8);
+
 }  // namespace handsim

@@ -67,6 +67,9 @@ void validate_world_def(const WorldDef& def) {
   validate_grasp_settings(def.grasp, "world.grasp.");
   if (def.render_threads < 1 || def.render_threads > 64)
     validate::fail("world.render_threads", "must be in 1..64, got " + std::to_string(def.render_threads));
+  // A skin thicker than a finger is no finger pulp; above 1 MPa skin is crushed, not pressed.
+  validate::in_range(def.skin_depth, 0, 0.05, "world.skin_depth", "m");
+  validate::in_range(def.skin_pressure, 0, 1e6, "world.skin_pressure", "Pa");
   if (int(def.particle_contacts) < 0 || int(def.particle_contacts) > 1)
     validate::fail("world.particle_contacts", "unknown method " + std::to_string(int(def.particle_contacts)));
 }

@@ -241,6 +241,7 @@ struct World::Impl {
   std::vector<std::pair<int, int>> scratch_ranges;     // detect_contacts
   std::vector<std::pair<int, int>> scratch_inside;     // deform_hands (displace_particles)
   std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
+  std::vector<SkinContact> scratch_pressed;            // fit_touched_bodies: contacts within the skin
   std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
   std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
   StageReport decide_grasps(double dt);
@@ -268,6 +269,9 @@ struct World::Impl {
   Eigen::Matrix3Xd scratch_stop_points, scratch_stop_theirs;
   std::vector<std::pair<int, int>> scratch_stop_ranges;
   StageReport fit_touched_bodies(double dt);
+  SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt) const;
+  InverseInertia inverse_inertia(const Body& b) const;
+  void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt);
   StageReport simulate(double dt);
   StageReport solve_joints(double dt);
   StageReport retake_secondary_hands();

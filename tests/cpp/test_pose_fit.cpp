@@ -290,3 +290,37 @@ TEST(PoseFit, VelocityFromMotion) {
   EXPECT_NEAR(rotation_vector(Mat3(Eigen::AngleAxisd(M_PI, axis).toRotationMatrix())).norm(), M_PI, 1e-12);
   EXPECT_THROW(velocity_from_motion(m, com, 0.0), Error);
 }
+
+// The contact skin's press (docs/grasp.md "First touch"): each contact pushes, never pulls, until the body moves
+// away at its needed speed there, by at most its impulse; an off-centre push turns the body; no mass, no motion.
+TEST(SkinPress, PushesUpToTheNeededSpeedWithinTheImpulseAndNeverPulls) {
+  InverseInertia body;
+  body.inverse_mass = 1 / 0.1;  // 100 g
+  body.inverse_inertia = Mat3::Identity() / (0.1 * 2.67e-5);  // a 4 cm cube: m a^2 / 6 with a = 4 cm
+  SkinContact top;
+  top.point = Vec3(0, 0.02, 0);
+  top.normal = Vec3::UnitY();
+  top.needed_speed = 0.05;  // the hand comes down at 5 cm/s
+  top.max_impulse = 1.0;
+  BodyVelocity v = skin_press({top}, body, {});
+  EXPECT_NEAR(v.linear.y(), -0.05, 1e-12);  // carried along at the hand's speed, not faster
+  EXPECT_LE(v.angular.norm(), 1e-12);       // through the centre: no turn
+  top.max_impulse = 0.001;                   // the pulp passes 1 mN s: 1 cm/s for 100 g
+  v = skin_press({top}, body, {});
+  EXPECT_NEAR(v.linear.y(), -0.01, 1e-12);
+  BodyVelocity leaving;
+  leaving.linear = Vec3(0, -0.2, 0);  // already moving away faster than the hand: nothing to do
+  v = skin_press({top}, body, leaving);
+  EXPECT_EQ(v.linear, leaving.linear);
+  top.needed_speed = -0.05;  // the hand lifts off: the skin does not pull the body after it
+  v = skin_press({top}, body, {});
+  EXPECT_EQ(v.linear, Vec3::Zero());
+  SkinContact edge = top;  // off-centre: turns the body, and the contact point reaches the needed speed
+  edge.point = Vec3(0.02, 0.02, 0);
+  edge.needed_speed = 0.05;
+  edge.max_impulse = 1.0;
+  v = skin_press({edge}, body, {}, 1);
+  EXPECT_GT(v.angular.norm(), 0);
+  EXPECT_NEAR((v.linear + v.angular.cross(edge.point)).dot(-edge.normal), 0.05, 1e-12);
+  EXPECT_EQ(skin_press({edge}, InverseInertia{}, {}).linear, Vec3::Zero());  // static: immovable
+}

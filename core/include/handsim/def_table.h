@@ -38,7 +38,9 @@
   X(WorldDef, grasp)                                                                                      \
   X(WorldDef, particle_contacts)                                                                          \
   X(WorldDef, paper_pipeline)                                                                             \
-  X(WorldDef, render_threads)
+  X(WorldDef, render_threads)                                                                             \
+  X(WorldDef, skin_depth)                                                                                 \
+  X(WorldDef, skin_pressure)
 
 #define HANDSIM_FIELDS_BODY_DEF(X)                                                                        \
   X(BodyDef, shape)                                                                                       \

@@ -52,6 +52,17 @@ struct WorldDef {
   // whichever thread runs it, so the vertices are bit-identical to one thread. A build without threads
   // (HANDSIM_WITH_THREADS=OFF) accepts the setting and uses one.
   int render_threads = 1;
+  // The contact skin (docs/grasp.md "First touch"). A particle's overlap with a free body up to skin_depth is
+  // compressed finger pulp, not bone: such shallow contacts press the body with the pulp's pressure, which
+  // grows with the compression to skin_pressure at skin_depth, as impulses at the contact points that Bullet
+  // resolves with the ground and the other bodies; only the overlap beyond skin_depth moves the body
+  // kinematically (eq. 2). So a hand laid onto a resting body presses it onto its support instead of fitting
+  // it to the skin's curvature. 0 turns the skin off: every overlap is pushed out by eq. 2, as in the paper.
+  // 3 mm: about what fingertip pulp compresses under a few newtons before the bone takes the load.
+  // 20 kPa: the pulp's contact pressure at that compression (a few N over the 1-2 cm^2 a pressed fingertip
+  // touches), well below the ~0.5 MPa where pressure starts to hurt.
+  double skin_depth = 0;       // m, 0 .. 0.05
+  double skin_pressure = 20e3; // Pa, 0 .. 1e6
 };
 
 struct BodyDef {

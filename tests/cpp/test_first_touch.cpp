@@ -1,0 +1,180 @@
+// First touch (issue 22 item 8): a hand laid onto a resting body does not fling it. With the contact skin
+// (WorldDef::skin_depth, docs/grasp.md "First touch"), overlaps up to the skin's depth press the body with the
+// pulp's force at the contact points instead of eq. 2's kinematic fit, so the body's support takes the press.
+#include "handsim/world.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+using namespace handsim;
+
+namespace {
+
+// The skin the docs give: 3 mm of pulp, 20 kPa at full compression.
+WorldDef with_skin(double depth = 0.003) {
+  WorldDef def;
+  def.skin_depth = depth;
+  return def;
+}
+
+struct Resting {
+  const char* name;
+  Vec3 half;
+  double mass;
+};
+// A 12 x 1 x 12 cm, 150 g plate (the issue's) and a 4 cm, 100 g cube.
+const Resting kPlate{"plate", Vec3(0.06, 0.005, 0.06), 0.15};
+const Resting kCube{"cube", Vec3(0.02, 0.02, 0.02), 0.1};
+
+struct Touch {
+  double moved = 0;   // largest distance of the body's centre from where it rested (m)
+  double tilted = 0;  // largest rotation from its resting orientation (rad)
+};
+
+double angle_between(const Quat& a, const Quat& b) { return Eigen::AngleAxisd(a.inverse() * b).angle(); }
+
+// The palm-down right hand (palm at the identity pose is the flat hand facing -y) over the body resting on the
+// ground, lowered at `speed` (m/s) from 2 cm above until the lowest particle over the body's top overlaps it by
+// `rest` (m), then held there for 0.5 s. Steps at `hz`.
+Touch lower_onto(const WorldDef& def, const Resting& body, double speed, double hz, double rest) {
+  World world(def);
+  HandDef hand_def;
+  hand_def.particle_count = 1182;  // explicit: the default may change
+  const HandId hand = world.add_hand(hand_def);
+  BodyDef bd;
+  bd.shape = ShapeDef::box(body.half);
+  bd.mass = body.mass;
+  bd.pose.position = Vec3(0, body.half.y(), 0);
+  const BodyId id = world.add_body(bd);
+  const double dt = 1 / hz;
+  for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
+  const Pose start = world.body_pose(id);
+  // Where the particles over the body's top are for the palm at the origin.
+  HandState state;
+  const HandFrame at_origin = make_hand_frame(Handedness::Right, Pose{});
+  pose_hand(world.hand_model(hand), at_origin, state);
+  double lowest = 1e9;
+  for (Eigen::Index p = 0; p < state.tracked_positions.cols(); ++p) {
+    const Vec3 x = state.tracked_positions.col(p);
+    if (std::abs(x.x()) < body.half.x() && std::abs(x.z()) < body.half.z()) lowest = std::min(lowest, x.y());
+  }
+  const double r = world.hand_model(hand).particle_radius;
+  const double end_y = 2 * body.half.y() + r - rest - lowest;  // the palm pose's height at rest
+  Touch worst;
+  double y = end_y + 0.02;
+  for (int i = 0; i < int(0.5 * hz) || y > end_y; ++i) {
+    if (y > end_y) y = std::max(end_y, y - speed * dt);
+    world.step(dt, {make_hand_frame(Handedness::Right, Pose{Vec3(0, y, 0), Quat::Identity()})});
+    const Pose now = world.body_pose(id);
+    worst.moved = std::max(worst.moved, (now.position - start.position).norm());
+    worst.tilted = std::max(worst.tilted, angle_between(start.orientation, now.orientation));
+  }
+  return worst;
+}
+
+constexpr double kDeg = M_PI / 180;
+
+}  // namespace
+
+// The issue's target: lowered at up to 20 cm/s and laid on it, at 30, 60 and 120 Hz, the plate and the cube move
+// <= 1 mm and turn <= 1 deg; the skin's full depth and less (1, 2, 3 mm of overlap at rest). Prints the worst case
+// without the skin too (docs/reliability.md "First touch" quotes both).
+TEST(FirstTouch, HandLoweredOntoARestingBodyBarelyMovesIt) {
+  for (const Resting& body : {kPlate, kCube}) {
+    Touch off, on;
+    for (double hz : {30.0, 60.0, 120.0})
+      for (double speed : {0.05, 0.10, 0.20})
+        for (double rest : {0.001, 0.002, 0.003}) {
+          const Touch a = lower_onto(WorldDef{}, body, speed, hz, rest);
+          const Touch b = lower_onto(with_skin(), body, speed, hz, rest);
+          off = {std::max(off.moved, a.moved), std::max(off.tilted, a.tilted)};
+          on = {std::max(on.moved, b.moved), std::max(on.tilted, b.tilted)};
+          EXPECT_LE(b.moved, 1e-3) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
+          EXPECT_LE(b.tilted, 1 * kDeg) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
+        }
+    std::printf("first touch, %s: worst over 27 runs without skin %.2f mm %.2f deg, with 3 mm skin %.3f mm %.3f deg\n",
+                body.name, off.moved * 1e3, off.tilted / kDeg, on.moved * 1e3, on.tilted / kDeg);
+  }
+}
+
+// A push on purpose still pushes: the flat palm (thumb up) driven sideways at 25 cm/s into the cube slides it
+// along like Step.FlatPalmPushSlidesTheCubeWithoutGrasping does without the skin, at 30, 60 and 120 Hz.
+TEST(FirstTouch, PushAt25CmPerSecondStillMovesTheBody) {
+  for (double hz : {30.0, 60.0, 120.0}) {
+    World world(with_skin());
+    world.add_hand(HandDef{});
+    BodyDef bd;
+    bd.shape = ShapeDef::box(kCube.half);
+    bd.mass = kCube.mass;
+    bd.pose.position = Vec3(0, kCube.half.y(), 0);
+    const BodyId cube = world.add_body(bd);
+    const double dt = 1 / hz, speed = 0.25;
+    for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
+    for (int i = 0; i < int(1.2 * hz); ++i) {
+      const Pose palm{Vec3(-0.09 + speed * i * dt, kCube.half.y(), 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
+      world.step(dt, {make_hand_frame(Handedness::Right, palm)});
+    }
+    const Pose end = world.body_pose(cube);
+    EXPECT_GT(end.position.x(), 0.15) << hz << " Hz: it went along";
+    EXPECT_NEAR(end.position.y(), kCube.half.y(), 2e-3) << hz << " Hz";
+    EXPECT_LT(angle_between(Quat::Identity(), end.orientation), 5 * kDeg) << hz << " Hz: still upright";
+  }
+}
+
+// A grasp still happens: the README's pinch closes the thumb and index pads on a 16 mm, 50 g cube on the ground
+// from an open hand in 0.25 s, then lifts it 9 cm; with the skin as without it, at 30, 60 and 120 Hz.
+TEST(FirstTouch, PinchStillGraspsAndLifts) {
+  for (double skin : {0.0, 0.003})
+    for (double hz : {30.0, 60.0, 120.0}) {
+      World world(with_skin(skin));
+      const HandId hand = world.add_hand(HandDef{});
+      HandPoseParams pinch;
+      pinch.curl = {0.2, 0.3, 0, 0, 0};
+      pinch.thumb_opposition = 1.0;
+      const HandFrame shape = make_hand_frame(Handedness::Right, Pose{}, pinch);
+      const Vec3 between = (shape.joints[kThumbTip].position + shape.joints[kIndexTip].position) / 2;
+      const double half = 0.008;
+      BodyDef bd;
+      bd.shape = ShapeDef::box(Vec3::Constant(half));
+      bd.mass = 0.05;
+      bd.pose.position = Vec3(0, half, 0);
+      const BodyId cube = world.add_body(bd);
+      Vec3 palm = Vec3(0, half, 0) - between;
+      const double dt = 1 / hz;
+      for (int i = 0; i < int(0.75 * hz); ++i) {
+        if (i >= int(0.25 * hz)) palm.y() += 0.18 * dt;  // lift at 18 cm/s once the pinch has closed
+        world.step(dt, {make_hand_frame(Handedness::Right, Pose{palm, Quat::Identity()},
+                                        closing_grip(pinch, i * dt))});
+      }
+      EXPECT_TRUE(world.body_grasp(cube).grasped) << "skin " << skin << ", " << hz << " Hz";
+      EXPECT_EQ(world.body_grasp(cube).primary, hand);
+      EXPECT_GT(world.body_pose(cube).position.y(), 0.08) << "skin " << skin << ", " << hz << " Hz";
+    }
+}
+
+// Bad settings are refused naming the field.
+TEST(FirstTouch, SkinSettingsOutsideTheirRangeAreRefused) {
+  for (double bad : {-1e-3, 0.051, double(NAN)}) {
+    WorldDef def;
+    def.skin_depth = bad;
+    EXPECT_THROW(
+        try { World w(def); } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("world.skin_depth"), std::string::npos) << e.what();
+          throw;
+        },
+        Error);
+  }
+  for (double bad : {-1.0, 2e6, double(INFINITY)}) {
+    WorldDef def;
+    def.skin_pressure = bad;
+    EXPECT_THROW(
+        try { World w(def); } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("world.skin_pressure"), std::string::npos) << e.what();
+          throw;
+        },
+        Error);
+  }
+}
