@@ -42,8 +42,9 @@
  * 2.4: hands addressed by id (handsim_hand_input, handsim_step_hands); handsim_step is deprecated and kept for
  * this ABI version (a minor bump: nothing existing changed; docs/native.md).
  * 2.5: handsim_world_settings gained skin_depth and skin_pressure at its end (the contact skin). Like
- * handsim_grasp_settings' squeeze_distance and pass_depth earlier in 2.x, a layout change made within this
- * session's 2.x, before any 2.x release, so no older 2.x host exists; after a release it would be a major. */
+ * handsim_grasp_settings' squeeze_distance, pass_depth and slip_distance earlier in 2.x, a layout change made
+ * within this session's 2.x, before any 2.x release, so no older 2.x host exists; after a release it would be a
+ * major. */
 #define HANDSIM_ABI_VERSION_MAJOR 2
 #define HANDSIM_ABI_VERSION_MINOR 5
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)

@@ -54,7 +54,9 @@ Checks (per recording, per hand):
   and the largest lid angle differs by at most 2 deg across rates.
 
 The grasp settings judged are selectable (``--rule default``, ``--rule contacts``, ``--rule paper``, or
-``--rule NAME:field=value,...`` of :class:`handsim.GraspSettings`); several rules are judged side by side.
+``--rule NAME:field=value,...`` of :class:`handsim.GraspSettings`, or of the :class:`handsim.WorldDef` fields in
+``RULE_WORLD_FIELDS``: the contact skin, which decides how the hand pushes what it has not grasped); several
+rules are judged side by side.
 ``--out DIR`` writes one picture per rule and failure kind, ``--doc FILE`` the table into a Markdown file
 between ``<!-- intent begin -->`` and ``<!-- intent end -->``; nothing is written without them.
 """
@@ -417,8 +419,7 @@ def _dt(track: Track, i: int) -> float:
 
 def build_world(placement: Placement, settings, hand_defs):
     """The judged world: both hands and the placed object. Returns (world, {name: body}, hinge or None)."""
-    wd = _core.WorldDef(ground=False)
-    wd.grasp = settings
+    wd = _world_def_with(settings)
     if placement.kind == "cube":
         wd.gravity = [0, 0, 0]
     world = _core.World(wd)
@@ -670,17 +671,25 @@ def judge_rates(track: Track, particles: Particles, settings, hand_defs, rates=R
 
 # --- rules, recordings, report ----------------------------------------------------------------------------
 
+# WorldDef fields a rule may set besides the GraspSettings: the contact skin (docs/grasp.md "First touch").
+RULE_WORLD_FIELDS = ("skin_depth", "skin_pressure")
+
+
 def parse_rule(spec: str) -> Tuple[str, object]:
-    """(name, GraspSettings) of a rule: "default", "contacts" (GraspSettings.contacts(): the rule before the hand's
+    """(name, WorldDef) of a rule: "default", "contacts" (GraspSettings.contacts(): the rule before the hand's
     intent was read), "paper" (GraspSettings.paper(): eq. 3 as printed, c = +0.7, any two contacts, grasp and
-    release on the first frame), or "NAME:field=value,..." (GraspSettings fields over the default)."""
+    release on the first frame), or "NAME:field=value,..." (GraspSettings fields and the WorldDef fields of
+    RULE_WORLD_FIELDS over the default). The judge builds its worlds from the WorldDef's grasp settings and
+    those fields only."""
     expected = "expected 'default', 'contacts', 'paper' or 'NAME:field=value,...'"
     if not isinstance(spec, str) or not spec:
         raise ValueError(f"rule: {expected}, got {spec!r}")
     presets = {"default": _core.GraspSettings, "contacts": _core.GraspSettings.contacts,
                "paper": _core.GraspSettings.paper}
+    world = _core.WorldDef(ground=False)
     if spec in presets:
-        return spec, presets[spec]()
+        world.grasp = presets[spec]()
+        return spec, world
     s = _core.GraspSettings()
     name, _, fields = spec.partition(":")
     if not name or not fields:
@@ -688,9 +697,11 @@ def parse_rule(spec: str) -> Tuple[str, object]:
     for item in fields.split(","):
         key, eq, value = item.partition("=")
         key = key.strip()
-        if not eq or not hasattr(s, key) or key.startswith("_"):
-            raise ValueError(f"rule {name}: {item!r} is not field=value of a GraspSettings field")
-        current = getattr(s, key)
+        target = world if key in RULE_WORLD_FIELDS else s
+        if not eq or not hasattr(target, key) or key.startswith("_"):
+            raise ValueError(f"rule {name}: {item!r} is not field=value of a GraspSettings field "
+                             f"or of {', '.join(RULE_WORLD_FIELDS)}")
+        current = getattr(target, key)
         try:
             if isinstance(current, bool):
                 if value.strip().lower() not in ("true", "false", "1", "0"):
@@ -698,19 +709,28 @@ def parse_rule(spec: str) -> Tuple[str, object]:
                 parsed = value.strip().lower() in ("true", "1")
             else:
                 parsed = type(current)(value)
-            setattr(s, key, parsed)
+            setattr(target, key, parsed)
         except (ValueError, TypeError) as e:
-            raise ValueError(f"rule {name}: GraspSettings.{key}: bad value {value!r} ({e})") from None
+            owner = "WorldDef" if target is world else "GraspSettings"
+            raise ValueError(f"rule {name}: {owner}.{key}: bad value {value!r} ({e})") from None
+    world.grasp = s
     try:
-        _core.World(_world_def_with(s))  # the world validates its settings
+        _core.World(_world_def_with(world))  # the world validates its settings
     except Exception as e:
         raise ValueError(f"rule {name}: {e}") from None
-    return name, s
+    return name, world
 
 
 def _world_def_with(settings):
+    """A fresh judged WorldDef (no ground) from a rule: a WorldDef of parse_rule (its grasp settings and
+    RULE_WORLD_FIELDS), or GraspSettings alone."""
     wd = _core.WorldDef(ground=False)
-    wd.grasp = settings
+    if isinstance(settings, _core.WorldDef):
+        wd.grasp = settings.grasp
+        for field in RULE_WORLD_FIELDS:
+            setattr(wd, field, getattr(settings, field))
+    else:
+        wd.grasp = settings
     return wd
 
 
@@ -967,7 +987,8 @@ def main(argv=None) -> int:
                     help="recordings or folders of them (the docs use ../shared/assets/leap_recordings; "
                          "none are looked for elsewhere)")
     ap.add_argument("--rule", action="append",
-                    help="grasp settings to judge: default, contacts, paper, or NAME:field=value,... (repeat to compare)")
+                    help="grasp settings to judge: default, contacts, paper, or NAME:field=value,... of GraspSettings "
+                         f"or {', '.join(RULE_WORLD_FIELDS)} (repeat to compare)")
     ap.add_argument("--sweep-frames", type=int, default=SWEEP_FRAMES,
                     help=f"placement frames per hand in the sweep (default {SWEEP_FRAMES})")
     ap.add_argument("--json", action="store_true", help="print the results as one JSON document")

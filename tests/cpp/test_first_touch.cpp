@@ -67,7 +67,7 @@ Touch lower_onto(const WorldDef& def, const Resting& body, double speed, double 
   double y = end_y + 0.02;
   for (int i = 0; i < int(0.5 * hz) || y > end_y; ++i) {
     if (y > end_y) y = std::max(end_y, y - speed * dt);
-    world.step(dt, {make_hand_frame(Handedness::Right, Pose{Vec3(0, y, 0), Quat::Identity()})});
+    world.step(dt, {{hand, make_hand_frame(Handedness::Right, Pose{Vec3(0, y, 0), Quat::Identity()})}});
     const Pose now = world.body_pose(id);
     worst.moved = std::max(worst.moved, (now.position - start.position).norm());
     worst.tilted = std::max(worst.tilted, angle_between(start.orientation, now.orientation));
@@ -105,7 +105,7 @@ TEST(FirstTouch, HandLoweredOntoARestingBodyBarelyMovesIt) {
 TEST(FirstTouch, PushAt25CmPerSecondStillMovesTheBody) {
   for (double hz : {30.0, 60.0, 120.0}) {
     World world(with_skin());
-    world.add_hand(HandDef{});
+    const HandId hand = world.add_hand(HandDef{});
     BodyDef bd;
     bd.shape = ShapeDef::box(kCube.half);
     bd.mass = kCube.mass;
@@ -115,7 +115,7 @@ TEST(FirstTouch, PushAt25CmPerSecondStillMovesTheBody) {
     for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
     for (int i = 0; i < int(1.2 * hz); ++i) {
       const Pose palm{Vec3(-0.09 + speed * i * dt, kCube.half.y(), 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
-      world.step(dt, {make_hand_frame(Handedness::Right, palm)});
+      world.step(dt, {{hand, make_hand_frame(Handedness::Right, palm)}});
     }
     const Pose end = world.body_pose(cube);
     EXPECT_GT(end.position.x(), 0.15) << hz << " Hz: it went along";
@@ -146,8 +146,8 @@ TEST(FirstTouch, PinchStillGraspsAndLifts) {
       const double dt = 1 / hz;
       for (int i = 0; i < int(0.75 * hz); ++i) {
         if (i >= int(0.25 * hz)) palm.y() += 0.18 * dt;  // lift at 18 cm/s once the pinch has closed
-        world.step(dt, {make_hand_frame(Handedness::Right, Pose{palm, Quat::Identity()},
-                                        closing_grip(pinch, i * dt))});
+        world.step(dt, {{hand, make_hand_frame(Handedness::Right, Pose{palm, Quat::Identity()},
+                                               closing_grip(pinch, i * dt))}});
       }
       EXPECT_TRUE(world.body_grasp(cube).grasped) << "skin " << skin << ", " << hz << " Hz";
       EXPECT_EQ(world.body_grasp(cube).primary, hand);

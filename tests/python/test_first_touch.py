@@ -23,7 +23,7 @@ def lower_palm_onto_plate(world_def, speed=0.10, hz=60.0, rest=0.002):
     for _ in range(int(0.5 * hz)):
         world.step(dt)
     start = np.array(world.body_pose(plate))
-    world.step(dt, [handsim.make_hand_frame(RIGHT, [0, 1, 0, 0, 0, 0, 1])])  # far above: where the skin is
+    world.step(dt, {hand: handsim.make_hand_frame(RIGHT, [0, 1, 0, 0, 0, 0, 1])})  # far above: where the skin is
     particles = np.array(world.hand_particles(hand, False))
     over = (np.abs(particles[:, 0]) < HALF[0]) & (np.abs(particles[:, 2]) < HALF[2])
     lowest = particles[over, 1].min() - 1
@@ -31,7 +31,7 @@ def lower_palm_onto_plate(world_def, speed=0.10, hz=60.0, rest=0.002):
     y, moved, turned = end_y + 0.02, 0.0, 0.0
     for i in range(int(1.5 * hz)):
         y = max(end_y, y - speed * dt)
-        world.step(dt, [handsim.make_hand_frame(RIGHT, [0, y, 0, 0, 0, 0, 1])])
+        world.step(dt, {hand: handsim.make_hand_frame(RIGHT, [0, y, 0, 0, 0, 0, 1])})
         pose = np.array(world.body_pose(plate))
         moved = max(moved, float(np.linalg.norm(pose[:3] - start[:3])))
         turned = max(turned, math.degrees(2 * math.acos(min(1.0, abs(float(pose[6]))))))

@@ -155,8 +155,16 @@ def test_bad_rules_name_the_field():
                 "mine:across_parts=maybe"):
         with pytest.raises(ValueError, match="rule"):
             intent.parse_rule(bad)
-    name, s = intent.parse_rule("strict:cos_threshold=-0.9,grasp_time_s=0.05,across_parts=false")
+    name, w = intent.parse_rule("strict:cos_threshold=-0.9,grasp_time_s=0.05,across_parts=false")
+    s = w.grasp
     assert name == "strict" and s.cos_threshold == -0.9 and s.grasp_time_s == 0.05 and not s.across_parts
+    name, w = intent.parse_rule("skin:skin_depth=0.003,closing_distance=0.015")  # the contact skin too
+    assert w.skin_depth == 0.003 and w.grasp.closing_distance == 0.015
+    assert intent._world_def_with(w).skin_depth == 0.003
+    with pytest.raises(ValueError, match=r"WorldDef.skin_depth"):
+        intent.parse_rule("skin:skin_depth=abc")
+    with pytest.raises(ValueError, match=r"world.skin_depth"):
+        intent.parse_rule("skin:skin_depth=1")
 
 
 def test_the_cli_writes_nowhere_without_out(tmp_path, capsys):
