@@ -262,6 +262,7 @@ static class CSharpTest
     static void TestGraspRuleAndGrips()
     {
         GraspSettings g = WorldSettings.Default.Grasp, contacts = GraspSettings.Contacts, paper = GraspSettings.Paper;
+        Check(g.ClosingDistance > 0 && g.OpeningDistance > 0, "the default rule needs the hand to close and open");
         g.ClosingDistance = g.OpeningDistance = 0;
         Check(g.Equals(contacts), "the contacts rule differs from the default in more than closing/opening");
         Check(paper.CosThreshold == 0.7 && paper.AcrossParts == 0 && paper.GraspTimeS == 0 && paper.ReleaseTimeS == 0 &&

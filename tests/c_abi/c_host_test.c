@@ -891,6 +891,7 @@ static void test_grasp_rule_and_grips(void) {
   MUST(handsim_grasp_settings_contacts(&contacts));
   MUST(handsim_grasp_settings_paper(&paper));
   g = settings.grasp;
+  CHECK(g.closing_distance > 0 && g.opening_distance > 0, "the default rule needs the hand to close and open");
   g.closing_distance = g.opening_distance = 0;
   CHECK(memcmp(&g, &contacts, sizeof g) == 0, "the contacts rule differs from the default in more than closing/opening");
   CHECK(paper.cos_threshold == 0.7 && !paper.across_parts && paper.grasp_time_s == 0 && paper.release_time_s == 0 &&

@@ -1,7 +1,7 @@
-// The two grasp rules every synthetic scene is checked with (docs/grasp.md, "Intent"): eq. 3 with its hysteresis
-// only (closing_distance and opening_distance 0), and with the intent rule on at the values docs/grasp.md gives
-// (a grasp begins only while the hand closes by 1.5 cm within 0.5 s; a held body is let go once it opens by
-// 2.5 cm). A scene whose hand closes onto its object as people do (closing_grip) works with both.
+// The two grasp rules every synthetic scene is checked with (docs/grasp.md, "Intent"): the default, the intent rule
+// (a grasp begins only while the hand closes by 1.5 cm within 0.5 s; a held body is let go once it opens by 2.5 cm),
+// and GraspSettings::contacts(), eq. 3 with its hysteresis only (the default before). A scene whose hand closes onto
+// its object as people do (closing_grip) works with both.
 #pragma once
 
 #include "handsim/world.h"
@@ -15,10 +15,10 @@ namespace handsim::test {
 enum class GraspRule { Contacts, Intent };
 
 inline GraspSettings grasp_rule(GraspRule rule, GraspSettings s = {}) {
-  const bool intent = rule == GraspRule::Intent;
-  s.closing_distance = intent ? 0.015 : 0.0;
-  s.closing_window_s = 0.5;
-  s.opening_distance = intent ? 0.025 : 0.0;
+  const GraspSettings r = rule == GraspRule::Intent ? GraspSettings{} : GraspSettings::contacts();
+  s.closing_distance = r.closing_distance;
+  s.closing_window_s = r.closing_window_s;
+  s.opening_distance = r.opening_distance;
   return s;
 }
 

@@ -16,7 +16,7 @@ using namespace handsim;
 
 namespace {
 
-constexpr uint64_t kGoldenHash = 0xda5d6c76b12b9bd8ull;
+constexpr uint64_t kGoldenHash = 0xf9e10e5f2b01d66cull;  // since the intent rule became the default (docs/grasp.md)
 
 struct Outcome {
   uint64_t hash = 0;

@@ -213,7 +213,8 @@ TEST(Step, PinchGraspsTheCube) {
 
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
 // it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
-// gives the same opposing contacts and is not grasped, though the default rule grasps it.
+// gives the same opposing contacts and is not grasped, though GraspSettings::contacts() grasps it (the default, the
+// closing rule, does not either: the hand is not closing).
 // GraspSettings::pass_depth: contacts deeper than it do not begin a grasp (0.1 mm: hardly any contact counts).
 TEST(Step, SqueezeDistanceNeedsTheHandToCloseOnTheBody) {
   WorldDef squeeze;
@@ -236,8 +237,10 @@ TEST(Step, SqueezeDistanceNeedsTheHandToCloseOnTheBody) {
     EXPECT_GT(s.world.body_contact_count(s.box, s.hand), 0);
   }
   {
-    Scene s;
-    EXPECT_EQ(closed_approach(s), 1);  // the default rule: opposing contacts suffice
+    WorldDef contacts;
+    contacts.grasp = GraspSettings::contacts();
+    Scene s(contacts);
+    EXPECT_EQ(closed_approach(s), 1);  // the contacts rule: opposing contacts suffice
   }
   {
     WorldDef shallow = squeeze;
@@ -489,7 +492,7 @@ TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
   EXPECT_EQ(s.grasp_ends, 2);                 // parting the palms lets go
   EXPECT_NEAR(s.fell_to, 0.0, 0.005);         // and the box falls back to the ground
   // One palm alone pushes the box and never grasps it; palms put against it that never approach it (1 mm
-  // of travel) do not grasp it; without the closing rule (the default for now) two hands do not combine.
+  // of travel) do not grasp it; without the closing rule (GraspSettings::contacts()) two hands do not combine.
   const Squeeze one = squeeze_big_box(0.04, 0.015, false);
   EXPECT_EQ(one.grasp_begins, 0);
   EXPECT_LT(one.lift, 0.005);

@@ -85,10 +85,10 @@ TEST(StepReport, JointSolvedIsClearedTheFrameAfterTheHandLeaves) {
   World world;
   JewelryBox box = build_jewelry_box(world);
   const HandId hand = world.add_hand(HandDef{});
-  const HandPoseParams shape = lid_pinch_shape();
-  for (int i = 0; i < 40; ++i) {
-    const double angle = std::clamp((i - 10) / 30.0, 0.0, 1.0) * 0.5;
-    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle), shape)});
+  for (int i = 0; i < 50; ++i) {  // the hand closes its pinch on the lip (closing_grip: 15 frames), then swings
+    const double angle = std::clamp((i - 20) / 30.0, 0.0, 1.0) * 0.5;
+    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
+                                     closing_grip(lid_pinch_shape(), i * kDt))});
   }
   ASSERT_TRUE(world.body_grasp(box.lid).grasped);
   const JointState held = world.joint_state(box.hinge);

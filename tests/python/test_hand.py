@@ -497,7 +497,7 @@ def test_grasp_rules_to_compare_with():
     fields = [f for f in dir(handsim.GraspSettings()) if not f.startswith("_") and f not in ("contacts", "paper")]
     d, c, p = handsim.GraspSettings(), handsim.GraspSettings.contacts(), handsim.GraspSettings.paper()
     assert c.closing_distance == 0 and c.opening_distance == 0
-    assert [f for f in fields if getattr(c, f) != getattr(d, f)] in ([], ["closing_distance", "opening_distance"])
+    assert [f for f in fields if getattr(c, f) != getattr(d, f)] == ["closing_distance", "opening_distance"]
     assert sorted(f for f in fields if getattr(p, f) != getattr(c, f)) == [
         "across_parts", "cos_threshold", "grasp_time_s", "release_time_s"]
     assert p.cos_threshold == handsim.PAPER_LITERAL_COS and not p.across_parts

@@ -985,18 +985,16 @@ def test_expectations_name_the_grasp_a_watcher_would_not_expect():
 # The confidence-demo session is 10 s long and in the folder four times (full, 1/2, 1/4, 1/8 of its frames):
 # the eighth-res copy replays in full, the other three for their first 4 s (hands before the grab).
 BOUNDED = {"confidence-demo": 240, "confidence-demo-half-res": 240, "confidence-demo-quarter-res": 240}
-# Expectations today's grasp rule does not meet since the formatVersion 0.1 hands have Leap's own metacarpal bases
-# (issue 20 item 5, docs/input.md): the heel of the hand is as wide as Leap's model has it (the little finger's
-# base 17 mm further out than the 15 % rule put it), and open hands grasp the cube with it (issue 20 item 2, the
-# judge's false grasps). Strict: the entry must go when the rule meets the expectation again.
-# Since entry_face no longer leaves a far face behind when it finds no crossing (issue 20 item 6), two more: in
-# confidence-demo-eighth-res the right hand, open again at 7.85 s, re-grasps the cube it let go at Leap strength 0,
-# and in confidence2-49fps the open left hand's grasp at 1.2 s (strength 0) is now its first; the stale far face
-# had changed those contacts, not the rule.
-OPEN_HAND_GRASPS = {"confidence2-49fps": {"as it closes", "no grasp by an open hand"},
-                    "confidence-demo-eighth-res": {"no grasp by an open hand"},
-                    "grab": {"as it closes", "no grasp by an open hand"},
-                    "three-claps": {"no grasp of the cube"}}
+# Expectations the default grasp rule (the closing rule, issue 20 item 2) does not meet with the formatVersion 0.1
+# hands' own metacarpal bases (issue 20 item 5, docs/input.md): open hands grasp the replay's cube (the judge's
+# false grasps). The rule before (GraspSettings.contacts()) missed confidence-demo, confidence2-49fps, grab and
+# three-claps instead (docs/input.md before the change); the judge passes confidence2's right hand with the closing
+# rule and fails confidence-demo-eighth-res with both (docs/grasp.md). Strict: the entry must go when the rule meets
+# the expectation again.
+OPEN_HAND_GRASPS = {"confidence-demo-eighth-res": {"no grasp by an open hand"},
+                    "confidence2": {"no grasp by an open hand"},
+                    "confidence2-49fps": {"no grasp by an open hand"},
+                    "grab": {"as it closes", "no grasp by an open hand"}}
 
 
 @pytest.mark.parametrize("name", recording_names())
@@ -1020,17 +1018,31 @@ def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings)
                                       "with two parts, so across_parts no longer keeps it from a grasp (docs/grasp.md)")
 def test_three_claps_grasps_only_without_the_two_part_rule(leap_recordings):
     """docs/grasp.md, eq. 3: the clapping hand's palm drapes over the cube's top edges. Without
-    GraspSettings.across_parts eq. 3 calls that a grasp (from 0.83 s); with it, nothing is grasped. Since the
-    metacarpal bases are Leap's own (issue 20 item 5) the rule grasps from 0.25 s without across_parts and from
-    0.85 s with it: the hand's edge now touches the cube with the little metacarpal and the little finger's
-    proximal phalanx (71 and 14 contacts when it begins), two rigid parts."""
+    GraspSettings.across_parts eq. 3 from the contacts alone (GraspSettings.contacts(), the rule it was measured
+    with) calls that a grasp (from 0.83 s); with it, nothing is grasped. Since the metacarpal bases are Leap's own
+    (issue 20 item 5) the rule grasps from 0.25 s without across_parts and from 0.85 s with it: the hand's edge now
+    touches the cube with the little metacarpal and the little finger's proximal phalanx (71 and 14 contacts when
+    it begins), two rigid parts."""
     motion = replay.motion_from_leap(dev_recording(leap_recordings, "three-claps"))
-    old = handsim.WorldDef()
-    old.grasp.across_parts = False
-    before = replay.run(replay.session_from_motion(motion, "free_box", world_def=old), "three-claps")
-    after = replay.run(replay.session_from_motion(motion, "free_box"), "three-claps")
+
+    def grasps(grasp):
+        return replay.run(replay.session_from_motion(motion, "free_box", world_def=handsim.WorldDef(grasp=grasp)),
+                          "three-claps")
+    one_part = handsim.GraspSettings.contacts()
+    one_part.across_parts = False
+    before, after = grasps(one_part), grasps(handsim.GraspSettings.contacts())
     assert before.grasps.get("box", 0) >= 1 and abs(before.first_grasp_s - 0.83) < 0.01
     assert not after.grasps
+
+
+def test_three_claps_grasps_nothing_with_the_closing_rule(leap_recordings):
+    """The default (closing) rule, with or without across_parts: the clapping hand never closes its grip, so
+    whatever its edge touches is not grasped (docs/grasp.md, "Intent")."""
+    motion = replay.motion_from_leap(dev_recording(leap_recordings, "three-claps"))
+    for across_parts in (True, False):
+        world_def = handsim.WorldDef(grasp=handsim.GraspSettings(across_parts=across_parts))
+        assert not replay.run(replay.session_from_motion(motion, "free_box", world_def=world_def),
+                              "three-claps").grasps, across_parts
 
 
 @pytest.mark.parametrize("name", ["flat", "fist", "pinch"])

@@ -49,11 +49,12 @@ def test_joint_solved_is_false_the_frame_after_the_hand_leaves():
     world = handsim.World()
     box = handsim.build_jewelry_box(world)
     hand = world.add_hand(handsim.HandDef())
-    shape = handsim.lid_pinch_shape()
-    for i in range(40):
-        angle = min(max((i - 10) / 30, 0.0), 1.0) * 0.5
+    pinch = handsim.lid_pinch_shape()
+    for i in range(50):  # the hand closes its pinch on the lip (closing_grip: 15 frames), then swings
+        angle = min(max((i - 20) / 30, 0.0), 1.0) * 0.5
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, angle)
-        world.step(DT, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm, params=shape)])
+        world.step(DT, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm,
+                                                params=handsim.closing_grip(pinch, i * DT))])
     assert world.body_grasp(box.lid).grasped and world.joint_state(box.hinge).solved
     world.remove_hand(hand)
     world.step(DT)

@@ -35,15 +35,15 @@ struct GraspSettings {
   // 0.045 s (three 60 Hz frames) without a hold release: one frame dropped a firmly held cube under 3 mm thumb
   // jitter; two had no margin. 0: the first frame without a hold releases.
   double release_time_s = 0.045;
-  // Intent (docs/grasp.md), off (0) by default until the repo's synthetic scenes close their hands.
+  // Intent (docs/grasp.md, "Intent"; the default, judged on real tracking by python -m handsim.intent).
   // A grasp begins only while the hand closes: its grip span (grip_span: the four fingertips' distances to the
   // palm joint plus the thumb tip's to the index tip) shrank by at least closing_distance from its widest within
   // the last closing_window_s. A hand that moves or turns as a whole keeps its span, so an open hand passing
   // through a thin lid or a flat hand paddling through a box does not grasp it. Two hands squeezing one body
-  // close by their palms approaching each other instead (and combine only with this on). Value to use:
-  // 1.5 cm, half of the ~3 cm an opening pinch's thumb-index gap travels, several times what a few mm of
-  // tracker jitter moves five tips.
-  double closing_distance = 0;
+  // close by their palms approaching each other instead (and combine only with this on). 1.5 cm: half of
+  // the ~3 cm an opening pinch's thumb-index gap travels, several times what a few mm of tracker jitter moves
+  // five tips. 0: off (contacts() and paper(): where the skin is decides alone).
+  double closing_distance = 0.015;
   // 0.5 s: a reach-and-grasp closes the hand within a few tenths of a second.
   double closing_window_s = 0.5;
   // A grasp begins only while the hand squeezes the body (docs/grasp.md, "Squeeze"): an opposing pair of its
@@ -62,9 +62,9 @@ struct GraspSettings {
   double pass_depth = 0;
   // A held body is let go once the hand opens: its grip span has grown by more than opening_distance over the
   // tightest it was since the grasp began, whatever skin still touches it (an open hand with a cube in its
-  // palm, its skin draped over opposite faces, held it on). Value to use: 2.5 cm, each of the five measured
-  // distances opened by the 5 mm release_distance. 0: off (contacts alone decide, the paper).
-  double opening_distance = 0;
+  // palm, its skin draped over opposite faces, held it on). 2.5 cm: each of the five measured distances opened
+  // by the 5 mm release_distance. 0: off (contacts alone decide, contacts() and paper()).
+  double opening_distance = 0.025;
   // A held object's particles count as holding it while their spheres stay within this distance (m) of its
   // surface, since an attached object is no longer penetrated. 0 dropped a lightly held cube
   // under 1.5 mm jitter; 5 mm keeps > 3 sigma of margin for ~1 frame of release latency per 2.5 mm.
