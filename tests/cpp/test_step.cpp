@@ -863,8 +863,12 @@ struct Press {
   double height = 0;           // the cube centre's final height (m)
 };
 
+// GraspSettings::contacts(): on the way back up the pinch, held still, takes the cube again by its contacts alone;
+// the default closing rule would need the hand to close again (it does not here).
 Press press(bool table, double dt, double depth, const Vec3& sideways = Vec3::Zero()) {
-  Scene s(WorldDef{}, table);
+  WorldDef def;
+  def.grasp = GraspSettings::contacts();
+  Scene s(def, table);
   s.grasp();
   Press out;
   if (!s.world.body_grasp(s.box).grasped) return out;
