@@ -6,7 +6,14 @@
 
 namespace handsim::capi {
 
-static size_t live_hands(const World& world) { return world.hands().size(); }
+// A step gets at most one frame per live hand: reject a wild count before converting anything (the core checks
+// too, but only after the frames were converted). `what` names the array's elements in the message.
+static void check_hand_count(const World& world, int32_t hand_count, const char* what) {
+  const size_t live = world.hands().size();
+  if (size_t(hand_count) > live)
+    validate::fail("hands", "got " + std::to_string(hand_count) + " " + what + " but the world has " +
+                                std::to_string(live) + " hands");
+}
 
 }  // namespace handsim::capi
 
@@ -99,11 +106,7 @@ HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const
   return guarded([&] {
     handsim_world& w = checked(world);
     input_array(hands, hand_count, "hands", "hand_count");
-    // The core checks this too, but only after the frames were converted: reject a wild count first.
-    const size_t live = live_hands(w.world);
-    if (size_t(hand_count) > live)
-      validate::fail("hands", "got " + std::to_string(hand_count) + " frames but the world has " +
-                                  std::to_string(live) + " hands");
+    check_hand_count(w.world, hand_count, "frames");
     // Per calling thread, not per world: two threads stepping one world must not share the scratch.
     thread_local std::vector<HandFrame> frames;
     frames.resize(size_t(hand_count));
@@ -118,12 +121,8 @@ HANDSIM_API int HANDSIM_CALL handsim_step_hands(handsim_world* world, double dt,
   return guarded([&] {
     handsim_world& w = checked(world);
     input_array(hands, hand_count, "hands", "hand_count");
-    // Each live hand has at most one entry, so a longer array repeats or names dead hands: reject a wild
-    // count before converting the frames (the core would name the first repeat, but only afterwards).
-    const size_t live = live_hands(w.world);
-    if (size_t(hand_count) > live)
-      validate::fail("hands", "got " + std::to_string(hand_count) + " entries but the world has " +
-                                  std::to_string(live) + " hands");
+    // Each live hand has at most one entry, so a longer array repeats or names dead hands.
+    check_hand_count(w.world, hand_count, "entries");
     thread_local std::vector<HandInput> inputs;  // per calling thread, as in handsim_step
     inputs.resize(size_t(hand_count));
     for (int32_t k = 0; k < hand_count; ++k) {
