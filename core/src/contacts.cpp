@@ -273,14 +273,18 @@ bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double ma
   return true;
 }
 
+void local_box_in_world(const Vec3& llo, const Vec3& lhi, const Pose& pose, Vec3& lo, Vec3& hi) {
+  const Mat3 R = pose.orientation.normalized().toRotationMatrix();
+  const Vec3 c = pose.transform(0.5 * (llo + lhi));
+  const Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
+  lo = c - e;
+  hi = c + e;
+}
+
 void shape_world_bounds(const ShapeDef& shape, const Pose& pose, Vec3& lo, Vec3& hi) {
   Vec3 llo, lhi;
   shape_local_bounds(shape, llo, lhi);
-  const Mat3 R = pose.orientation.normalized().toRotationMatrix();
-  Vec3 c = pose.transform(0.5 * (llo + lhi));
-  Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
-  lo = c - e;
-  hi = c + e;
+  local_box_in_world(llo, lhi, pose, lo, hi);
 }
 
 namespace {

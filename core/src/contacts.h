@@ -22,6 +22,10 @@ void collide_particle_ranges(const Eigen::Matrix3Xd& centres, const std::vector<
 // and false when that face lies further back than `max_time` along u: the velocity then does not explain how
 // the point got in (the body moved onto a still hand; a noisy estimate), and the far face it names would
 // ask for a push of centimetres. `normal` and `offset` are left untouched unless it returns true.
+// The world-axis box around a body-local box [llo, lhi] at `pose` (one place for the arithmetic of
+// shape_world_bounds, the broadphase boxes and the static stop, which start from a prepared shape's cached bounds).
+void local_box_in_world(const Vec3& llo, const Vec3& lhi, const Pose& pose, Vec3& lo, Vec3& hi);
+
 bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double max_time, Vec3& normal,
                 double& offset);
 

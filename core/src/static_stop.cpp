@@ -56,14 +56,6 @@ void shape_points(const PreparedShape& ps, const Pose& pose, Eigen::Matrix3Xd& o
   }
 }
 
-// World bounds of a prepared shape at `pose` (the arithmetic of update_box).
-void world_bounds(const PreparedShape& ps, const Pose& pose, Vec3& lo, Vec3& hi) {
-  const Vec3 c = pose.transform(0.5 * (ps.local_lo + ps.local_hi));
-  const Vec3 e = pose.orientation.normalized().toRotationMatrix().cwiseAbs() * (0.5 * (ps.local_hi - ps.local_lo));
-  lo = c - e;
-  hi = c + e;
-}
-
 // The translation that satisfies every stop (normal . t >= depth - slop), by cyclic projection onto their
 // half-spaces: exact for one surface, and for surfaces at right angles (floor and wall) after one pass.
 Vec3 satisfy(const std::vector<StaticStop>& stops) {
@@ -93,7 +85,7 @@ void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<S
       if (depth > 0) out.push_back({Vec3::UnitY(), depth});
     }
   Vec3 lo, hi;
-  world_bounds(held.prepared, pose, lo, hi);
+  local_box_in_world(held.prepared.local_lo, held.prepared.local_hi, pose, lo, hi);
   bodies_near(lo, hi, 0, &near_bodies);
   std::vector<ParticleContact>& contacts = scratch_stop_contacts;
   for (uint32_t si : near_bodies) {

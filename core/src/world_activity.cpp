@@ -27,15 +27,12 @@ void World::Impl::update_box(uint32_t bi) {
     std::fill(next, next + 3, std::numeric_limits<double>::infinity());
     std::fill(next + 3, next + 6, -std::numeric_limits<double>::infinity());
   } else {
-    // The prepared shape's local bounds, turned: the same arithmetic as shape_world_bounds without
-    // recomputing the local bounds (a convex hull's walk over its points).
-    const Vec3 llo = b.prepared.local_lo, lhi = b.prepared.local_hi;
-    const Mat3 R = b.pose.orientation.normalized().toRotationMatrix();
-    const Vec3 c = b.pose.transform(0.5 * (llo + lhi));
-    const Vec3 e = R.cwiseAbs() * (0.5 * (lhi - llo));
+    // The prepared shape's cached local bounds, turned (not recomputed: a convex hull's walk over its points).
+    Vec3 lo, hi;
+    local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, b.pose, lo, hi);
     for (int k = 0; k < 3; ++k) {
-      next[k] = c[k] - e[k];
-      next[3 + k] = c[k] + e[k];
+      next[k] = lo[k];
+      next[3 + k] = hi[k];
     }
   }
   if (!std::equal(next, next + 6, box)) box_order_dirty = true;  // a body at rest keeps the order valid
