@@ -1,5 +1,5 @@
 // The world's state, shared by world.cpp (the public API), world_step.cpp (Algorithm 1) and the files of its
-// stages (skinning, contacts, deformation, grasp, pose_fit, world_joints, world_activity, world_state).
+// stages (skinning, contacts, deformation, grasp, pose_fit, dynamics, world_joints, world_activity, world_state).
 #pragma once
 
 #include "handsim/world.h"
@@ -226,7 +226,7 @@ struct World::Impl {
   // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it:
   // pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps,
   // follow_primary_hands and retake_secondary_hands grasp.cpp, fit_touched_bodies pose_fit.cpp, simulate
-  // world_step.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
+  // dynamics.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
   // This step's frame of each hand slot, indexed like `hands` (null: no frame, the hand is untracked).
   using SlotFrames = std::vector<const HandFrame*>;
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
@@ -276,7 +276,7 @@ struct World::Impl {
   StageReport solve_joints(double dt);
   StageReport retake_secondary_hands();
 
-  // Step input checks (world_step.cpp): everything is checked before anything changes.
+  // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
   void validate_hand_frame(const HandFrame& frame, const HandSlot& h, const std::string& argument) const;
   SlotFrames frames_by_id(double dt, const std::vector<HandInput>& inputs) const;

@@ -1,0 +1,61 @@
+// What a step is given -- dt and one frame per hand -- checked before anything changes, so a step refused on bad
+// input leaves the world intact; the result is the per-slot frame table the stages read.
+#include "validate.h"
+#include "world_impl.h"
+
+#include <string>
+
+namespace handsim {
+
+void World::Impl::validate_dt(double dt) const {
+  validate::time_step(dt);
+  // The clock is a double: at t = 1000 s a step below 1.1e-13 s would not advance it (and the hand history
+  // would then see time stand still).
+  if (!(time + dt > time))
+    validate::fail("dt", validate::fmt(dt) + " s is below the clock's resolution at t = " + validate::fmt(time) +
+                             " s (time + dt == time)");
+}
+
+void World::Impl::validate_hand_frame(const HandFrame& frame, const HandSlot& h, const std::string& argument) const {
+  validate_frame(frame, argument);
+  if (frame.handedness != h.def.handedness) validate::fail(argument + ".handedness", "does not match the hand it drives");
+}
+
+World::Impl::SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
+  validate_dt(dt);
+  SlotFrames frames(hands.size(), nullptr);
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    const std::string argument = "hands[" + std::to_string(k) + "]";
+    const HandId id = inputs[k].hand;
+    hand(id, (argument + ".hand").c_str());  // null or not a live hand of this world: StaleId
+    if (frames[id.index]) {
+      size_t first = 0;
+      while (inputs[first].hand != id) ++first;
+      validate::fail(argument + ".hand", "index " + std::to_string(id.index) + ", generation " +
+                                             std::to_string(id.generation) + " already has a frame, in hands[" +
+                                             std::to_string(first) + "]");
+    }
+    validate_hand_frame(inputs[k].frame, hands[id.index], argument + ".frame");
+    frames[id.index] = &inputs[k].frame;
+  }
+  return frames;
+}
+
+World::Impl::SlotFrames World::Impl::frames_by_position(double dt, const std::vector<HandFrame>& list) const {
+  validate_dt(dt);
+  size_t live = 0;
+  for (const HandSlot& h : hands) live += h.alive;
+  if (list.size() > live)
+    validate::fail("hands", "got " + std::to_string(list.size()) + " frames but the world has " +
+                                std::to_string(live) + " hands");
+  SlotFrames frames(hands.size(), nullptr);
+  size_t k = 0;
+  for (uint32_t i = 0; i < hands.size() && k < list.size(); ++i) {
+    if (!hands[i].alive) continue;
+    validate_hand_frame(list[k], hands[i], "hands[" + std::to_string(k) + "]");
+    frames[i] = &list[k++];
+  }
+  return frames;
+}
+
+}  // namespace handsim
