@@ -19,37 +19,43 @@
 
 namespace handsim {
 
-struct Body {
-  uint32_t generation = 0;
-  bool alive = false;
+// Each object is split into its model -- built once when it is added, never changed by a step: shape, inertia,
+// joint frames, hand models, the Bullet handles -- and its state, which the step changes and which decides the
+// future: poses, velocities, grasps, joint coordinates, hand histories. save_state, restore_state and the
+// state hash walk the states (world_state.cpp); the model fingerprint covers the models. See docs/design.md
+// "Model and state".
+
+struct BodyModel {
   ShapeDef shape;
   PreparedShape prepared;  // narrow-phase data for hand particles, built once
   double mass = 0;
   double friction = 0.5, restitution = 0;  // as given; Bullet holds them, a rebuilt Bullet scene needs them
   BodyMotion declared = BodyMotion::Static;  // what the BodyDef asked for
-  BodyMotion motion = BodyMotion::Static;    // now: a grasped dynamic body is kinematic
+  Vec3 unit_inertia = Vec3::Ones();  // principal moments per kg, body frame (for hard joints' dynamics)
+  int backend = -1;
+  int hard_joint = -1;  // index of the hard joint whose child this is, or -1
+  int soft_joint = -1;  // index of a soft joint whose child this is (driven by the hand, not attached)
+
+  bool jointed() const { return hard_joint >= 0; }
+};
+
+struct BodyState {
+  BodyMotion motion = BodyMotion::Static;  // now: a grasped dynamic body is kinematic
   Pose pose;
   Pose synced_pose;  // kinematic bodies: the pose Bullet last saw, for interpolating across substeps
   Vec3 linear = Vec3::Zero();
   Vec3 angular = Vec3::Zero();
-  int backend = -1;
   GraspInfo grasp;
   Pose secondary_relative;  // body pose in the secondary hand's palm frame (re-taken every frame, eq. 5)
-  Vec3 unit_inertia = Vec3::Ones();  // principal moments per kg, body frame (for hard joints' dynamics)
-  int hard_joint = -1;  // index of the hard joint whose child this is, or -1
-  int soft_joint = -1;  // index of a soft joint whose child this is (driven by the hand, not attached)
   // A hard joint's child pushed by a hand against gravity this frame (eq. 2): the hand carries its weight,
   // so the joint integrates no gravity for the frame (see docs/design.md).
   bool supported = false;
-
   // Released by its hand in this step: it leaves with the hand's velocity, which the object-centred update
   // must not replace in the same step (the fingers that just let go still press it by the grip's depth).
   bool just_released = false;
   // Dynamic: Bullet had it asleep when last read, so it has not moved since (read_dynamic_bodies).
   bool read_asleep = false;
 
-  bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
-  bool jointed() const { return hard_joint >= 0; }
   // Whether the hand in slot `hand` holds this body, as primary or secondary. (A null secondary id has
   // index 0 too, so comparing indices alone would make hand slot 0 hold every singly held body.)
   bool held_by(uint32_t hand) const {
@@ -58,13 +64,19 @@ struct Body {
   }
 };
 
-constexpr uint32_t kWorldParent = UINT32_MAX;
-
-// A joint and its state. Hard joints keep their coordinate here and place the child from it; soft joints
-// live in Bullet and only read back.
-struct Joint {
+// A body slot: its model and its state, and the slot's generation and liveness.
+struct Body : BodyModel, BodyState {
   uint32_t generation = 0;
   bool alive = false;
+
+  bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
+};
+
+constexpr uint32_t kWorldParent = UINT32_MAX;
+
+// A joint's model: what it joins and how. Hard joints keep their coordinate in the state and place the child
+// from it; soft joints live in Bullet and only read back.
+struct JointSlotModel {
   JointType type = JointType::Hinge;
   JointModel model = JointModel::Hard;
   JointSolver solver = JointSolver::Exact;
@@ -77,12 +89,15 @@ struct Joint {
   double damping = 0;
   JointVertices vertices;  // the child's model vertices and their moments about the joint point (eq. 4)
   double length = 0;       // child size (m) that turns an axis error into a displacement
+  int constraint = -1;     // soft: Bullet constraint handle
+  int depth = 0;           // hard: joints between the child and the root of its group
+};
+
+struct JointSlotState {
   double value = 0, rate = 0;          // hinge / slider coordinate and its rate
   Quat rotation = Quat::Identity();    // ball
   Vec3 spin = Vec3::Zero();            // ball: angular velocity relative to the parent, world frame
   Quat solved_rotation = Quat::Identity();  // ball: the micro-simulator's last answer
-  int constraint = -1;                 // soft: Bullet constraint handle
-  int depth = 0;                       // hard: joints between the child and the root of its group
   JointSolveResult last;  // the micro-simulator's solve of this step, if `solved`
   bool solved = false;
 
@@ -92,28 +107,43 @@ struct Joint {
   }
 };
 
-struct HandSlot {
+struct Joint : JointSlotModel, JointSlotState {
   uint32_t generation = 0;
   bool alive = false;
+};
+
+// A hand's model: its definition and what is built from it once.
+struct HandSlotModel {
   HandDef def;
   std::shared_ptr<const HandModel> model;
+  HandReach reach;  // the coarse bounds of the lazy particles (below), built once from the model
+};
+
+// A hand's state: the tracked frame's bones and palm, the histories the grasp rules read, and the particle
+// caches (skinned from the bones, deformed from the contacts; saved so a restored world reads back the same).
+struct HandSlotState {
   HandState state;
   HandMotionHistory history;
   GripHistory grip;  // grip span and palm over the last closing_window_s (GraspSettings::closing_distance)
   ArticulationHistory articulation;  // bones over the last closing_window_s (GraspSettings::squeeze_distance)
   Pose palm;
   bool has_pose = false;  // a tracked frame has been seen
-  Eigen::Matrix3Xd render;
-  bool render_dirty = true;
   // Lazy particles: a hand whose coarse bounds (from the bones, before skinning) are far from every body skips
   // skinning its particles; state.bones are kept, and the particles are skinned when something reads them.
-  HandReach reach;                  // built once from the model
   bool particles_current = true;    // state.tracked_positions belong to the last tracked frame
   bool deformed_current = true;     // state.deformed_positions hold this frame's deformation (else == tracked)
   std::vector<double> group_bounds; // box of each particle group's centres (6 per group); empty: not skinned
   std::vector<uint32_t> reach_groups;  // the groups skin_particles_in_reach skinned, ascending
   bool reach_groups_only = false;      // only reach_groups have boxes (else every group has its exact box)
   std::vector<Vec3> displaced_centres;  // deformed centre of each of state.displaced (deform_hands)
+};
+
+// A hand slot: model, state, and what is rebuilt from them when needed (neither saved nor hashed).
+struct HandSlot : HandSlotModel, HandSlotState {
+  uint32_t generation = 0;
+  bool alive = false;
+  Eigen::Matrix3Xd render;
+  bool render_dirty = true;
   // ParticleContacts::BulletObjects: this hand's particles as Bullet objects, rebuilt when bodies change.
   std::unique_ptr<BulletParticleCollider> bullet_particles;
   std::vector<uint32_t> bullet_bodies;  // body slot of each collider body

@@ -435,7 +435,7 @@ StageReport World::Impl::solve_joints(double dt) {
 namespace {
 // The parts every joint definition shares; `frame` is the compiled frame (make_*_frame).
 template <class Def, class Frame>
-Joint joint_from(JointType type, const Def& d, Frame Joint::*slot, Frame frame) {
+Joint joint_from(JointType type, const Def& d, Frame JointSlotModel::*slot, Frame frame) {
   Joint j;
   j.type = type;
   j.model = d.model;

@@ -266,6 +266,63 @@ template <class V, class Face> void visit_face(V& v, Face& f, uint32_t particles
   v.state(f.depth);
 }
 
+// One body's, joint's and hand's state (world_impl.h: BodyState, JointSlotState, HandSlotState); S is the state
+// or its const, given explicitly (Const below) so that these see nothing of the slot's model. `particles` and `groups` bound the hand's indices (from its model); `squeeze` is whether the
+// squeeze rule keeps its history (GraspSettings::squeeze_distance > 0), so a world without it saves and hashes
+// as before.
+template <class W, class T> using Const = std::conditional_t<std::is_const_v<W>, const T, T>;
+
+template <class S, class V> void visit_body(S& b, V& v) {
+  v.state(b.pose);
+  v.state(b.synced_pose);
+  v.state(b.linear);
+  v.state(b.angular);
+  v.enumeration(b.motion, BodyMotion::Kinematic);
+  v.state(b.grasp.grasped);
+  v.hand(b.grasp.primary);
+  v.hand(b.grasp.secondary);
+  v.state(b.grasp.primary_relative);
+  v.state(b.secondary_relative);
+  v.state(b.supported);
+  v.state(b.just_released);
+  v.state(b.read_asleep);
+}
+
+template <class S, class V> void visit_joint(S& j, V& v) {
+  v.state(j.value);
+  v.state(j.rate);
+  v.state(j.rotation);
+  v.state(j.spin);
+  v.state(j.solved_rotation);
+  v.state(j.solved);
+  v.cache(j.last.value);  // the last solve's report (joint_state); the next solve does not read it
+  v.cache(j.last.cost);
+  v.cache(j.last.iterations);
+  v.enumeration(j.last.termination, JointTermination::AtLimit);  // (its wall time is no state)
+}
+
+template <class S, class V> void visit_hand(S& h, V& v, uint32_t particles, uint32_t groups, bool squeeze) {
+  v.state(h.state.tracked);
+  v.state(h.has_pose);
+  v.state(h.palm);
+  for (auto& bone : h.state.bones) v.state(bone);
+  std::remove_const_t<std::remove_reference_t<decltype(h.history)>>::visit_state(h.history, v);
+  std::remove_const_t<std::remove_reference_t<decltype(h.grip)>>::visit_state(h.grip, v);
+  if (squeeze) std::remove_const_t<std::remove_reference_t<decltype(h.articulation)>>::visit_state(h.articulation, v);
+  // Particles: skinned from the bones (lazily), deformed from the contacts of the frame. Caches.
+  v.points(h.state.tracked_positions, particles);
+  v.points(h.state.deformed_positions, particles);
+  v.cache_list(h.state.displaced, [&](auto& p) { v.index(p, particles); });
+  v.cache_list(h.displaced_centres, [&](auto& c) { v.cache(c); });
+  v.cache(h.state.bounds_lo);
+  v.cache(h.state.bounds_hi);
+  v.cache(h.particles_current);
+  v.cache(h.deformed_current);
+  v.cache(h.group_bounds);
+  v.cache_list(h.reach_groups, [&](auto& g) { v.index(g, groups); });
+  v.cache(h.reach_groups_only);
+}
+
 // W is World::Impl (restore) or const World::Impl (save, hash); B likewise BackendState. Bullet's copy of a
 // body is visited by handle, for the handles live bodies use (which handles are live is the model's).
 template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
@@ -275,63 +332,16 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
   v.cache(w.idle_substeps);
   v.cache(w.nonfinite_recoveries);
   for (uint32_t i = 0; i < w.bodies.size(); ++i) {
-    auto& b = w.bodies[i];
-    if (!b.alive) continue;
+    if (!w.bodies[i].alive) continue;
     v.mark(uint64_t(i) << 1 | 1u);
-    v.state(b.pose);
-    v.state(b.synced_pose);
-    v.state(b.linear);
-    v.state(b.angular);
-    v.enumeration(b.motion, BodyMotion::Kinematic);
-    v.state(b.grasp.grasped);
-    v.hand(b.grasp.primary);
-    v.hand(b.grasp.secondary);
-    v.state(b.grasp.primary_relative);
-    v.state(b.secondary_relative);
-    v.state(b.supported);
-    v.state(b.just_released);
-    v.state(b.read_asleep);
+    visit_body<Const<W, BodyState>>(w.bodies[i], v);
   }
-  for (auto& j : w.joints) {
-    if (!j.alive) continue;
-    v.state(j.value);
-    v.state(j.rate);
-    v.state(j.rotation);
-    v.state(j.spin);
-    v.state(j.solved_rotation);
-    v.state(j.solved);
-    v.cache(j.last.value);  // the last solve's report (joint_state); the next solve does not read it
-    v.cache(j.last.cost);
-    v.cache(j.last.iterations);
-    v.enumeration(j.last.termination, JointTermination::AtLimit);  // (its wall time is no state)
-  }
-  for (auto& h : w.hands) {
-    if (!h.alive) continue;
-    const uint32_t particles = uint32_t(h.model->particle_count());
-    const uint32_t groups = uint32_t(h.model->particle_skin.groups.size());
-    v.state(h.state.tracked);
-    v.state(h.has_pose);
-    v.state(h.palm);
-    for (auto& bone : h.state.bones) v.state(bone);
-    std::remove_const_t<std::remove_reference_t<decltype(h.history)>>::visit_state(h.history, v);
-    std::remove_const_t<std::remove_reference_t<decltype(h.grip)>>::visit_state(h.grip, v);
-    // Kept only with the squeeze rule on (GraspSettings::squeeze_distance), so a world without it saves and hashes
-    // as before.
-    if (w.def.grasp.squeeze_distance > 0)
-      std::remove_const_t<std::remove_reference_t<decltype(h.articulation)>>::visit_state(h.articulation, v);
-    // Particles: skinned from the bones (lazily), deformed from the contacts of the frame. Caches.
-    v.points(h.state.tracked_positions, particles);
-    v.points(h.state.deformed_positions, particles);
-    v.cache_list(h.state.displaced, [&](auto& p) { v.index(p, particles); });
-    v.cache_list(h.displaced_centres, [&](auto& c) { v.cache(c); });
-    v.cache(h.state.bounds_lo);
-    v.cache(h.state.bounds_hi);
-    v.cache(h.particles_current);
-    v.cache(h.deformed_current);
-    v.cache(h.group_bounds);
-    v.cache_list(h.reach_groups, [&](auto& g) { v.index(g, groups); });
-    v.cache(h.reach_groups_only);
-  }
+  for (auto& j : w.joints)
+    if (j.alive) visit_joint<Const<W, JointSlotState>>(j, v);
+  for (auto& h : w.hands)
+    if (h.alive)
+      visit_hand<Const<W, HandSlotState>>(h, v, uint32_t(h.model->particle_count()), uint32_t(h.model->particle_skin.groups.size()),
+                 w.def.grasp.squeeze_distance > 0);
   v.pairs(w.pairs, [&](const auto& key, auto& pair) {
     const uint32_t particles = uint32_t(w.hands[key.first].model->particle_count());
     std::remove_const_t<std::remove_reference_t<decltype(pair.tracker)>>::visit_state(pair.tracker, v);
@@ -389,6 +399,19 @@ struct ModelHasher {
     add(v.size());
     for (const T& e : v) add(e);
   }
+  void add(const BodyModel& b) {
+    add(b.shape), add(b.mass), add(b.friction), add(b.restitution), add(b.declared);
+    add(b.backend), add(b.hard_joint), add(b.soft_joint);
+  }
+  void add(const JointSlotModel& j) {
+    add(j.type), add(j.model), add(j.solver), add(j.parent), add(j.child), add(j.damping), add(j.length);
+  }
+  void add(const HandSlotModel& h) {
+#define HANDSIM_HAND_FIELD(Def, field) add(h.def.field);
+    HANDSIM_FIELDS_HAND_DEF(HANDSIM_HAND_FIELD)
+#undef HANDSIM_HAND_FIELD
+    add(h.model->particle_count()), add(h.model->particle_radius);
+  }
 };
 
 // Bullet's part of the state as it now is.
@@ -401,25 +424,15 @@ uint64_t World::Impl::model_fingerprint() const {
 #define HANDSIM_WORLD_FIELD(Def, field) m.add(def.field);
   HANDSIM_FIELDS_WORLD_DEF(HANDSIM_WORLD_FIELD)
 #undef HANDSIM_WORLD_FIELD
-  for (const Body& b : bodies) {
-    m.add(b.alive);
-    if (!b.alive) continue;
-    m.add(b.shape), m.add(b.mass), m.add(b.friction), m.add(b.restitution), m.add(b.declared);
-    m.add(b.backend), m.add(b.hard_joint), m.add(b.soft_joint);
-  }
-  for (const Joint& j : joints) {
-    m.add(j.alive);
-    if (!j.alive) continue;
-    m.add(j.type), m.add(j.model), m.add(j.solver), m.add(j.parent), m.add(j.child), m.add(j.damping), m.add(j.length);
-  }
-  for (const HandSlot& h : hands) {
-    m.add(h.alive);
-    if (!h.alive) continue;
-#define HANDSIM_HAND_FIELD(Def, field) m.add(h.def.field);
-    HANDSIM_FIELDS_HAND_DEF(HANDSIM_HAND_FIELD)
-#undef HANDSIM_HAND_FIELD
-    m.add(h.model->particle_count()), m.add(h.model->particle_radius);
-  }
+  auto slots = [&m](const auto& table, auto as_model) {
+    for (const auto& slot : table) {
+      m.add(slot.alive);
+      if (slot.alive) m.add(as_model(slot));
+    }
+  };
+  slots(bodies, [](const Body& b) -> const BodyModel& { return b; });
+  slots(joints, [](const Joint& j) -> const JointSlotModel& { return j; });
+  slots(hands, [](const HandSlot& h) -> const HandSlotModel& { return h; });
   // Where the next add puts its body, joint or hand: part of building alike.
   m.add(free_body_slots), m.add(free_joint_slots), m.add(free_hand_slots);
   m.add(backend_state_of(*this).free_handles);
