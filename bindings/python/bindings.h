@@ -6,6 +6,7 @@
 namespace handsim {
 void bind_errors(pybind11::module_& m);
 void bind_hand(pybind11::module_& m);
+void bind_glove(pybind11::module_& m);  // after bind_hand: takes and returns HandFrames
 void bind_step_report(pybind11::module_& m);  // before bind_world: World.step returns a StepReport
 void bind_world(pybind11::module_& m);
 void bind_world_hands(pybind11::module_& m);  // after bind_world: adds the hand methods to World

@@ -15,6 +15,7 @@ PYBIND11_MODULE(_core, m) {
 #endif
   handsim::bind_errors(m);
   handsim::bind_hand(m);
+  handsim::bind_glove(m);
   handsim::bind_step_report(m);
   handsim::bind_world(m);
   handsim::bind_world_hands(m);

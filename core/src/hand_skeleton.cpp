@@ -84,19 +84,35 @@ void build_finger(const FingerSpec& fs, double curl, double spread, double s, Ha
   set_joint(f, fs.first_joint + 4, p, dir, axis, s * fs.radius[4]);
 }
 
-// The thumb chain for given flexion angles and abduction (swing about the palm's Z axis under the palm).
-void build_thumb_chain(const std::array<double, 3>& flex, double abduct, double s, HandFrame& f) {
+// The thumb's bones for given flexion angles and abduction (swing about the palm's Z axis under the palm): joint
+// positions from the metacarpal to the tip, bone directions and the flexion axis. Positions only: the bisection
+// in build_thumb needs the tip alone and so pays for no joint orientations (make_hand_frame is the per-frame
+// cost of every simulated user's glove).
+struct ThumbChain {
+  std::array<Vec3, 4> p;
+  std::array<Vec3, 3> dir;
+  Vec3 axis;
+};
+
+ThumbChain thumb_chain(const std::array<double, 3>& flex, double abduct, double s) {
   Quat ab(Eigen::AngleAxisd(abduct, Vec3::UnitZ()));  // +Z rotation turns -X towards -Y: under the palm
   Vec3 dir = ab * kThumbDir.normalized();
   Vec3 nail = ab * kThumbNail;
-  Vec3 axis = nail.cross(-dir);  // X = Y x Z
-  Vec3 p = s * kThumbBase;
+  ThumbChain c;
+  c.axis = nail.cross(-dir);  // X = Y x Z
+  c.p[0] = s * kThumbBase;
   for (int k = 0; k < 3; ++k) {
-    dir = flexion(axis, flex[k]) * dir;
-    set_joint(f, kThumbMetacarpal + k, p, dir, axis, s * kThumbRadius[k]);
-    p += s * kThumbLength[k] * dir;
+    dir = flexion(c.axis, flex[k]) * dir;
+    c.dir[k] = dir;
+    c.p[k + 1] = c.p[k] + s * kThumbLength[k] * dir;
   }
-  set_joint(f, kThumbTip, p, dir, axis, s * kThumbRadius[3]);
+  return c;
+}
+
+void build_thumb_chain(const std::array<double, 3>& flex, double abduct, double s, HandFrame& f) {
+  const ThumbChain c = thumb_chain(flex, abduct, s);
+  for (int k = 0; k < 3; ++k) set_joint(f, kThumbMetacarpal + k, c.p[k], c.dir[k], c.axis, s * kThumbRadius[k]);
+  set_joint(f, kThumbTip, c.p[3], c.dir[2], c.axis, s * kThumbRadius[3]);
 }
 
 // Rigid rotation of the thumb joints about its carpometacarpal joint.
@@ -129,8 +145,7 @@ void build_thumb(double curl, double opposition, double s, HandFrame& f) {
   double lo = 0, hi = 1.3;
   for (int it_count = 0; it_count < 50; ++it_count) {
     double mid = 0.5 * (lo + hi);
-    build_thumb_chain(flex_at(mid), abduct, s, f);
-    ((f.joints[kThumbTip].position - base).norm() > want ? lo : hi) = mid;
+    ((thumb_chain(flex_at(mid), abduct, s).p[3] - base).norm() > want ? lo : hi) = mid;
   }
   double lambda = (1 - opposition) * curl + opposition * 0.5 * (lo + hi);
   build_thumb_chain(flex_at(lambda), abduct, s, f);

@@ -151,62 +151,40 @@ def draw_user(seed: int, task: str, hands: int) -> UserParams:
                       finger_drift, palm_noise, palm_drift, yaw_drift, tuple(sorted(dropouts)), box_shift)
 
 
-class _OU:
-    """Ornstein-Uhlenbeck noise of stationary std `sigma` and time constant `tau`, per component."""
+class SeededGlove:
+    """The IMU glove of one user, between its intent and the hand frames: finger noise and drift, palm jitter and
+    residual drift, heading drift (handsim.Glove, in the core: it is the per-frame hot path of a trial), and
+    tracking dropouts (untracked frames). Its random numbers come from this glove's own seeded generator,
+    drawn ahead in blocks: the glove takes them in the order it always did, so a seed gives the same frames."""
 
-    def __init__(self, rng, n, sigma, tau, dt):
-        self.rng, self.sigma = rng, sigma
-        self.a = math.exp(-dt / tau)
-        self.b = sigma * math.sqrt(1 - self.a * self.a)
-        self.x = rng.normal(0, sigma, n) if sigma > 0 else np.zeros(n)
-
-    def step(self):
-        if self.sigma > 0:
-            self.x = self.a * self.x + self.b * self.rng.normal(0, 1, self.x.shape)
-        return self.x
-
-
-class Glove:
-    """The IMU glove between a user's intent and the hand frames: finger noise and drift, palm jitter and
-    residual drift, heading drift, and tracking dropouts (untracked frames)."""
+    NORMALS_BLOCK = 4096  # variates drawn per refill: about 200 frames
 
     def __init__(self, params: UserParams, handedness, seed_offset: int, dt: float):
         p = params
         self.p, self.handedness, self.dt = p, handedness, dt
         self.rng = np.random.default_rng([p.seed, 7919, seed_offset])
-        self.fingers = _OU(self.rng, 7, p.finger_drift, 1.0, dt)  # 5 curls, opposition, spread
-        self.palm = _OU(self.rng, 3, p.palm_drift, 0.7, dt)
-        self.yaw = _OU(self.rng, 1, p.yaw_drift, 1.0, dt)
+        self.core = _h.Glove(handedness, finger_noise=p.finger_noise, finger_drift=p.finger_drift,
+                             palm_noise=p.palm_noise, palm_drift=p.palm_drift, yaw_drift=p.yaw_drift,
+                             scale=p.scale, dt=dt)
+        self._z = np.empty(0)
+        self._next = 0
+        self.core.start(self._normals(self.core.start_normals))
         self.dropouts = p.dropouts if seed_offset == 0 else ()
+
+    def _normals(self, count: int):
+        """The next `count` standard normal variates of this glove's generator."""
+        if self._next + count > len(self._z):
+            self._z = np.concatenate([self._z[self._next:], self.rng.standard_normal(self.NORMALS_BLOCK)])
+            self._next = 0
+        self._next += count
+        return self._z[self._next - count:self._next]
 
     def tracked(self, t: float) -> bool:
         return not any(start <= t < start + length for start, length in self.dropouts)
 
     def frame(self, t: float, palm, shape: HandShape):
-        drift = self.fingers.step()
-        palm_off = self.palm.step()
-        yaw = float(self.yaw.step()[0])
-        white = self.rng.normal(0, self.p.finger_noise, 7)
-        jitter = self.rng.normal(0, self.p.palm_noise, 3)
-        if not self.tracked(t):
-            return untracked_frame(self.handedness)
-        n = drift + white
-        curl = np.clip(np.asarray(shape.curl) + n[:5], 0.0, 1.0)
-        opp = float(np.clip(shape.thumb_opposition + n[5], 0.0, 1.0))
-        spread = float(np.clip(shape.spread + 0.5 * n[6], -0.5, 1.0))
-        pose = np.asarray(palm, float).copy()
-        pose[:3] += palm_off + jitter
-        q = quat_mul(axis_angle([0, 1, 0], yaw), pose[3:])
-        pose[3:] = q / np.linalg.norm(q)
-        return _h.make_hand_frame(self.handedness, pose, curl=curl, thumb_opposition=opp, spread=spread,
-                                  scale=self.p.scale)
-
-
-def untracked_frame(handedness):
-    """A frame whose joints are all invalid: the tracker lost the hand."""
-    q = np.zeros((26, 4))
-    q[:, 3] = 1
-    return _h.HandFrame(handedness, np.zeros((26, 3)), q, valid=np.zeros(26, bool))
+        return self.core.frame(palm, shape.curl, shape.thumb_opposition, shape.spread, self.tracked(t),
+                               self._normals(self.core.frame_normals))
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -230,8 +208,8 @@ class SimulatedUser:
     def __init__(self, params: UserParams, world, box, dt: float = 1 / FRAME_RATE, hands: Sequence = None):
         self.p, self.world, self.box, self.dt = params, world, box, dt
         self.right_hand, self.left_hand = (list(hands) if hands is not None else world.hands()[:2] + [None])[:2]
-        self.right = Glove(params, _h.Handedness.RIGHT, 0, dt)
-        self.left = Glove(params, _h.Handedness.LEFT, 1, dt) if params.hands == 2 else None
+        self.right = SeededGlove(params, _h.Handedness.RIGHT, 0, dt)
+        self.left = SeededGlove(params, _h.Handedness.LEFT, 1, dt) if params.hands == 2 else None
         self.grasp_shape = GRASP_SHAPES[params.style]
         self.phase = "left_reach" if params.hands == 2 else "reach"
         self.phase_t = 0.0

@@ -40,6 +40,7 @@ def _instances():
         "HandFrame": bind, "HandModel": _core.HandModel(_core.HandDef(particle_count=50)),
         "SkinnedMesh": _core.make_hand_mesh(bind, 400), "BulletParticleCollider": _core.BulletParticleCollider(4, 0.01),
         "Event": events[0], "GraspInfo": world.body_grasp(box.lid), "StageReport": world.last_step().stages[0], "StepReport": world.last_step(),
+        "Glove": _core.Glove(_core.Handedness.RIGHT),
         "JointState": world.joint_state(box.hinge), "HingeFrame": hinge, "JointVertices": vertices,
         "JointSolveResult": _core.solvers.solve_hinge(_core.JointSolver.EXACT, hinge, vertices, identity, identity, 0.0),
     }

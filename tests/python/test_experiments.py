@@ -55,7 +55,7 @@ def test_draws_cover_the_styles_and_stay_in_range():
 
 
 def test_untracked_frame_is_untracked():
-    f = U.untracked_frame(handsim.Handedness.RIGHT)
+    f = handsim.untracked_frame(handsim.Handedness.RIGHT)
     assert not np.asarray(f.valid).any()
 
 

@@ -128,7 +128,9 @@ def report(rows, results, trials, check, seconds, command, where) -> str:
              "the lid (N(93°, 2.5°)), reaction time (0.25–0.5 s), glove errors like an IMU glove's: per-frame "
              "finger noise (σ 0.005–0.02 of full curl/opposition), finger drift (Ornstein-Uhlenbeck, σ up to 0.03, "
              "τ 1 s), palm jitter (σ 0.5–2 mm), uncorrected palm drift (OU, σ up to 4 mm, τ 0.7 s), heading drift "
-             "(σ up to 3°), and tracking dropouts (Poisson 0.25 per trial, lengths exponential, mean 0.12 s). "
+             "(σ up to 3°), and tracking dropouts (Poisson 0.25 per trial, lengths exponential, mean 0.12 s). The "
+             "glove is `handsim.Glove` in the core (the per-frame hot path; the users' random numbers still come "
+             "from their numpy generators, so a seed gives the same trial). "
              "The users are closed-loop like a person at a screen: they aim at where the lid is, notice when it "
              "no longer follows the hand (lag > 20° for longer than their reaction time) or fell back after they "
              "let go, and start again (at most 3 retries).\n")
