@@ -25,6 +25,7 @@ with the same world, the same frames.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from typing import List, Optional, Sequence, Tuple
 
@@ -77,8 +78,14 @@ class HandShape:
         """This grip opened by `openness` (0 the grip .. 1 the open hand) the way every synthetic hand of handsim
         opens and closes its grips (handsim.open_grip): people reach with the hand open and close it onto what
         they grasp, and the intent rule (GraspSettings.closing_distance) grasps only a closing hand."""
-        p = _h.open_grip(self.params(), float(min(max(openness, 0.0), 1.0)))
-        return HandShape(tuple(float(c) for c in p.curl), float(p.thumb_opposition), float(p.spread))
+        return _opened(self, float(min(max(openness, 0.0), 1.0)))
+
+
+@functools.lru_cache(maxsize=64)
+def _opened(shape: HandShape, openness: float) -> HandShape:
+    """HandShape.opened, remembered: most frames hold a grip (0) or an open hand (1), and a HandShape is immutable."""
+    p = _h.open_grip(shape.params(), openness)
+    return HandShape(tuple(float(c) for c in p.curl), float(p.thumb_opposition), float(p.spread))
 
 
 FLAT_HAND = HandShape()

@@ -105,11 +105,26 @@ class TrialResult:
     trace: Optional[Dict[str, list]] = None
 
 
+_MODEL_KEEPER = None  # see _share_hand_models
+
+
+def _share_hand_models():
+    """Keeps a world holding the benches' two hands alive for the rest of this process, so that every Bench
+    built here (one per job: a condition and cell on a runner's worker) shares their built models instead of
+    building them anew (~0.1-0.4 s a hand; World.add_hand shares the model of an equal HandDef among live
+    worlds). A shared model is the same numbers as a rebuilt one, so no trial changes."""
+    global _MODEL_KEEPER
+    if _MODEL_KEEPER is None:
+        from ..intent import default_hand_defs, model_keeper
+        _MODEL_KEEPER = model_keeper(default_hand_defs())
+
+
 class Bench:
     """One world per condition with a right and a left hand, reused for every trial of the condition: the
-    hand models are built once (they cost ~0.1-0.4 s each); each trial rebuilds only the box."""
+    hand models are built once per process (they cost ~0.1-0.4 s each); each trial rebuilds only the box."""
 
     def __init__(self, method: str, threshold: float, full_paper: bool = False):
+        _share_hand_models()
         self.method, self.threshold = method, threshold
         self.world = _h.World(world_def(method, threshold, full_paper))
         self.right = self.world.add_hand(_h.HandDef(handedness=_h.Handedness.RIGHT))
