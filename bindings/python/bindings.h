@@ -10,5 +10,6 @@ void bind_glove(pybind11::module_& m);  // after bind_hand: takes and returns Ha
 void bind_step_report(pybind11::module_& m);  // before bind_world: World.step returns a StepReport
 void bind_world(pybind11::module_& m);
 void bind_world_hands(pybind11::module_& m);  // after bind_world: adds the hand methods to World
-void bind_joints(pybind11::module_& m);  // last: adds the joint methods to World and WorldDef
+void bind_joints(pybind11::module_& m);  // adds the joint methods to World and WorldDef
+void bind_user_aim(pybind11::module_& m);  // after bind_joints: takes a JewelryBox
 }  // namespace handsim

@@ -20,4 +20,5 @@ PYBIND11_MODULE(_core, m) {
   handsim::bind_world(m);
   handsim::bind_world_hands(m);
   handsim::bind_joints(m);
+  handsim::bind_user_aim(m);
 }

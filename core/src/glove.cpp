@@ -3,6 +3,7 @@
 // tests/python/test_glove.py checks it against that reference on made-up input.
 #include "handsim/glove.h"
 
+#include "python_quat.h"
 #include "validate.h"
 
 #include <algorithm>
@@ -20,23 +21,13 @@ void finite_normals(const double* z, int n) {
   for (int i = 0; i < n; ++i) validate::finite(z[i], "z[" + std::to_string(i) + "]");
 }
 
-// The unit quaternion along q, its squared length summed with fused multiply-adds in index order: the sum numpy's
-// dot (OpenBLAS on x86-64) forms, which the Python glove normalized with, so the frames match it bit for bit.
-Quat normalized_like_numpy(double x, double y, double z, double w) {
-  const double n = std::sqrt(std::fma(w, w, std::fma(z, z, std::fma(y, y, x * x))));
-  return Quat(w / n, x / n, y / n, z / n);
-}
-
 // The intended palm turned by `yaw` about the world's vertical (+Y) and shifted by `offset`: the Python glove's
-// quat_mul(axis_angle([0, 1, 0], yaw), q) term for term.
+// quat_mul(axis_angle([0, 1, 0], yaw), q), normalized as numpy normalized it.
 Pose drifted_palm(const Pose& palm, const Vec3& offset, double yaw) {
-  const double s = std::sin(0.5 * yaw) / 1.0;  // axis_angle divides by the axis length, 1
-  const double ax = 0.0 * s, ay = 1.0 * s, az = 0.0 * s, aw = std::cos(0.5 * yaw);
+  namespace pq = python_quat;
   const Quat& b = palm.orientation;
-  const double bx = b.x(), by = b.y(), bz = b.z(), bw = b.w();
-  const Quat q = normalized_like_numpy(aw * bx + ax * bw + ay * bz - az * by, aw * by - ax * bz + ay * bw + az * bx,
-                                       aw * bz + ax * by - ay * bx + az * bw, aw * bw - ax * bx - ay * by - az * bz);
-  return {palm.position + offset, q};
+  const pq::Q q = pq::normalized_like_numpy(pq::mul(pq::axis_angle({0.0, 1.0, 0.0}, yaw), {b.x(), b.y(), b.z(), b.w()}));
+  return {palm.position + offset, Quat(q[3], q[0], q[1], q[2])};
 }
 
 }  // namespace

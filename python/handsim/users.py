@@ -197,6 +197,9 @@ class SeededGlove:
 # ---------------------------------------------------------------------------------------------------------
 # What the user means to do, frame by frame (closed loop on the box it sees).
 
+_NO_SHIFT = (0.0, 0.0, 0.0)
+
+
 class SimulatedUser:
     """Produces the hand frames of one trial. Call :meth:`frames` once per frame before ``World.step``; it
     reads the box's current state (as a subject reads the screen) and returns ``{HandId: HandFrame}`` for
@@ -258,18 +261,14 @@ class SimulatedUser:
 
     def _grip_pose(self, angle, up=0.0, out=0.0):
         """Palm pose on the lid's lip as if the lid were open by `angle`, with the user's aim error; `out`
-        backs it off past the lip and `up` raises it (both in the lid's frame, before the swing)."""
-        base = self._base()
-        closed = np.asarray(self.box.lid_pinch_palm(self.world, _h.Handedness.RIGHT, 0.0), float)
+        backs it off past the lip and `up` raises it (both in the lid's frame, before the swing). The pose
+        itself is handsim.lid_grip_palm (in the core: the user aims every frame, some frames twice)."""
         ax, ay, az = self.p.approach
+        thumb_fix = self._thumb_fix
         if self.p.style == "push":
             ay, az = ay + 0.004, az + 0.03  # a flat hand: fingertips short of the lip, nothing under it
-        else:
-            closed[:3] += quat_rotate(closed[3:], self._thumb_fix)
-        closed[:3] += quat_rotate(base[3:], [ax, ay + up, az + out])
-        pivot = np.asarray(self.box.hinge_pivot(self.world), float)
-        axis = np.asarray(self.box.hinge_axis(self.world), float)
-        return swing_pose(closed, pivot, axis, angle)
+            thumb_fix = _NO_SHIFT  # and no thumb to aim
+        return _h.lid_grip_palm(self.world, self.box, angle, thumb_fix, (ax, ay + up, az + out))
 
     def _up(self, pose, height):
         q = np.asarray(pose, float).copy()
