@@ -222,6 +222,10 @@ double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJo
   return span;
 }
 
+double hand_length(const HandModel& model) {
+  return (model.bind_inverse[kMiddleTip].inverse().position - model.bind_inverse[kWrist].inverse().position).norm();
+}
+
 void GripHistory::push(double span, const Vec3& palm, double time, double window) {
   validate::finite(span, "span");
   validate::finite(palm, "palm");
@@ -234,6 +238,11 @@ double GripHistory::closed_by() const {
   double widest = 0;
   for (const Sample& s : samples_) widest = std::max(widest, s.span);
   return samples_.empty() ? 0.0 : widest - samples_.back().span;
+}
+
+double GripHistory::palms_apart(const GripHistory& other) const {
+  if (samples_.empty() || other.samples_.empty()) return 0.0;
+  return (samples_.back().palm - other.samples_.back().palm).norm();
 }
 
 double GripHistory::approached_by(const GripHistory& other) const {
@@ -523,11 +532,15 @@ StageReport World::Impl::decide_grasps(double dt) {
       // palms approach each other. Each hand alone has its contacts on one face only. A hand that holds the
       // body by itself needs no partner, and does not lend one: a finger of the other hand still resting on
       // a body it handed over is no grip (SecondHandSlipsThenTakesOverWithoutAJump). Only with the closing
-      // rule: without it, two open hands flapping about a cube (Leap recording flapping) grasped it.
+      // rule: without it, two open hands flapping about a cube (Leap recording flapping) grasped it. And only a
+      // body too big for one hand: palms farther apart than the hand is long (hand_length). Two open palms
+      // clapping on a 5 cm cube (Leap recording three-claps, Leap's grab and pinch 0) are no grip; one hand
+      // grips a body that small.
       if (!own.opposing && closing_needed() > 0)
         for (const auto& [other, other_pair] : pairs)
           if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
-              hands[other.first].state.tracked && hands_oppose(pair, other_pair, directions, parts)) {
+              hands[other.first].state.tracked && h.grip.palms_apart(hands[other.first].grip) > hand_length(*h.model) &&
+              hands_oppose(pair, other_pair, directions, parts)) {
             intent.opposing = true;
             intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed();
             if (intent.closing) break;

@@ -117,6 +117,10 @@ int rigid_part(const HandModel& model, int particle);
 // pinch shortens it; moving or turning the hand as a whole does not change it.
 double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones);
 
+// The hand's length in its bind pose (m): wrist joint to middle fingertip. Two hands squeeze a body only with their
+// palms farther apart than this (decide_grasps): a body narrower than a hand is long is one hand's to grip.
+double hand_length(const HandModel& model);
+
 // Samples with a .time, oldest first, kept for the last `window` seconds (the newest is always kept): the grip and
 // articulation histories share this. Throws handsim::Error naming "time" unless times strictly increase.
 template <class Sample>
@@ -194,6 +198,8 @@ class GripHistory {
   // How much the distance between this hand's palm and `other`'s shrank from its widest in the window to
   // now, over the samples both have at the same times (0 when they share none).
   double approached_by(const GripHistory& other) const;
+  // The distance between this hand's palm and `other`'s in their newest samples (0 when either has none).
+  double palms_apart(const GripHistory& other) const;
 
   bool in_time_order() const;  // strictly increasing times, as push keeps them (a restored state is checked)
 

@@ -420,7 +420,7 @@ TEST(Step, HandPressedDownOntoABoxDoesNotGraspIt) {
 // alone touches one face, so neither hand grasps by itself; eq. 3 across the hands does, and the first hand
 // (primary, eq. 5) carries the box while the second slips. `approach` (m): how far each palm travels in to
 // its squeeze, 1 cm into the box; `closing` the GraspSettings::closing_distance (two hands combine only with
-// the closing rule on, docs/grasp.md).
+// the closing rule on, docs/grasp.md); `half` the box's half size.
 struct Squeeze {
   int grasp_begins = 0, grasp_ends = 0;
   bool held_by_both = false;
@@ -428,13 +428,12 @@ struct Squeeze {
   double fell_to = 1e9;  // its height after the palms part
 };
 
-Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true) {
+Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true, double half = 0.15) {
   WorldDef def;
   def.grasp.closing_distance = closing;
   World world(def);
   const HandId right = world.add_hand(HandDef{});
   const HandId left = world.add_hand(HandDef{Handedness::Left});
-  const double half = 0.15;
   BodyDef box;
   box.shape = ShapeDef::box(Vec3::Constant(half));
   box.mass = 1.0;
@@ -498,6 +497,9 @@ TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
   EXPECT_LT(one.lift, 0.005);
   EXPECT_EQ(squeeze_big_box(0.001, 0.015).grasp_begins, 0);
   EXPECT_EQ(squeeze_big_box(0.04, 0.0).grasp_begins, 0);
+  // Two palms clapped onto a 5 cm cube: one hand grips a body that small, two flat palms are no grip (the palms
+  // are nearer each other than a hand is long; the Leap recording three-claps' open hands "grasped" such a cube).
+  EXPECT_EQ(squeeze_big_box(0.04, 0.015, true, 0.025).grasp_begins, 0);
 }
 
 // Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
