@@ -98,7 +98,7 @@ uint32_t fresh_generation() {
   return g;
 }
 
-World::Impl::Impl(const WorldDef& d) : def(d), backend(std::make_unique<BulletBackend>(d)) {}
+World::Impl::Impl(const WorldDef& d) : WorldModel{d}, backend(std::make_unique<BulletBackend>(d)) {}
 
 Body& World::Impl::body(BodyId id, const char* argument) { return checked_slot(bodies, id, argument); }
 const Body& World::Impl::body(BodyId id, const char* argument) const {

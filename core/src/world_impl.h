@@ -1,5 +1,6 @@
-// The world's state, shared by world.cpp (the public API), world_step.cpp (Algorithm 1) and the files of its
-// stages (skinning, contacts, deformation, grasp, pose_fit, dynamics, world_joints, world_activity, world_state).
+// The world's model and state, shared by world.cpp (the public API), world_step.cpp (Algorithm 1) and the
+// files of its stages (skinning, contacts, deformation, grasp, pose_fit, dynamics, world_joints,
+// world_activity, world_state).
 #pragma once
 
 #include "handsim/world.h"
@@ -169,21 +170,36 @@ struct HandBodyPair {
   std::array<int, 2> witness{-1, -1};
 };
 
-struct World::Impl {
+// The world-level model: what add_* and remove_* build and a step only reads. With the *Model half of every live
+// slot of the tables below, it is what a restoring world must already have (model_fingerprint).
+struct WorldModel {
   WorldDef def;
-  std::unique_ptr<BulletBackend> backend;
-  std::vector<Body> bodies;
-  std::vector<uint32_t> free_body_slots;
-  std::vector<Joint> joints;
-  std::vector<uint32_t> free_joint_slots;
+  std::vector<uint32_t> free_body_slots, free_joint_slots, free_hand_slots;  // where the next add goes
   std::vector<uint32_t> joint_order;  // live hard joints, parents before children
-  std::vector<HandSlot> hands;
-  std::vector<uint32_t> free_hand_slots;
+  uint64_t body_version = 1;  // bumped on add/remove body, so per-hand caches know to rebuild
+};
+
+// The world-level state: what a step changes and the next one reads. With the *State half of every live slot,
+// it is what save_state writes and state_hash hashes (visit_world in world_state.cpp).
+struct WorldState {
+  double time = 0;
+  double accumulator = 0;  // the part of a substep carried to the next frame
+  int awake_bodies = 0;    // dynamic bodies Bullet still simulated after the last substep it ran
   // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
   std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
-  std::vector<Event> events;
   uint64_t nonfinite_recoveries = 0;  // Bullet results replaced by the last finite state (see substep)
-  uint64_t body_version = 1;  // bumped on add/remove body, so per-hand caches know to rebuild
+  uint64_t idle_substeps = 0;         // substeps in which Bullet was skipped (nothing awake)
+};
+
+// The world: its model and state, the slot tables (each slot both halves, world_impl.h above), Bullet (a
+// service that keeps its own copy, "The core owns the state" in docs/design.md), the step's output, and what
+// is derived from the state to make a step cheap (world_activity.cpp) or is scratch.
+struct World::Impl : WorldModel, WorldState {
+  std::unique_ptr<BulletBackend> backend;
+  std::vector<Body> bodies;
+  std::vector<Joint> joints;
+  std::vector<HandSlot> hands;
+  std::vector<Event> events;
   // How many of `events` (at the front) the last step raised. The next step drops those and keeps the ones
   // that removals raised after it, so a caller who reads events() after each step sees those too.
   size_t step_events = 0;
@@ -200,10 +216,6 @@ struct World::Impl {
   std::vector<uint32_t> released;  // bodies whose just_released is set
   std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
   uint64_t motion_version = 1, dynamic_version = 0;
-  int awake_bodies = 0;            // dynamic bodies Bullet still simulated after the last substep it ran
-  uint64_t idle_substeps = 0;      // substeps in which Bullet was skipped (nothing awake)
-  double time = 0;
-  double accumulator = 0;
 
   explicit Impl(const WorldDef& d);
 

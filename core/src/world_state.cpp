@@ -326,11 +326,12 @@ template <class S, class V> void visit_hand(S& h, V& v, uint32_t particles, uint
 // W is World::Impl (restore) or const World::Impl (save, hash); B likewise BackendState. Bullet's copy of a
 // body is visited by handle, for the handles live bodies use (which handles are live is the model's).
 template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
-  v.state(w.time);
-  v.state(w.accumulator);  // the part of a substep carried to the next frame
-  v.state(w.awake_bodies);  // whether the next frame must run Bullet (physics_needed)
-  v.cache(w.idle_substeps);
-  v.cache(w.nonfinite_recoveries);
+  Const<W, WorldState>& s = w;
+  v.state(s.time);
+  v.state(s.accumulator);  // the part of a substep carried to the next frame
+  v.state(s.awake_bodies);  // whether the next frame must run Bullet (physics_needed)
+  v.cache(s.idle_substeps);
+  v.cache(s.nonfinite_recoveries);
   for (uint32_t i = 0; i < w.bodies.size(); ++i) {
     if (!w.bodies[i].alive) continue;
     v.mark(uint64_t(i) << 1 | 1u);
@@ -342,7 +343,7 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
     if (h.alive)
       visit_hand<Const<W, HandSlotState>>(h, v, uint32_t(h.model->particle_count()), uint32_t(h.model->particle_skin.groups.size()),
                  w.def.grasp.squeeze_distance > 0);
-  v.pairs(w.pairs, [&](const auto& key, auto& pair) {
+  v.pairs(s.pairs, [&](const auto& key, auto& pair) {
     const uint32_t particles = uint32_t(w.hands[key.first].model->particle_count());
     std::remove_const_t<std::remove_reference_t<decltype(pair.tracker)>>::visit_state(pair.tracker, v);
     v.state(pair.previous_count);  // ContactBegin / ContactEnd are edges of it
