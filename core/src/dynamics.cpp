@@ -52,8 +52,8 @@ void World::Impl::substep(double h, int i, int n, bool physics) {
     ++idle_substeps;
   }
   if (!joint_order.empty()) {
-    integrate_joints(h);
-    place_children();  // after the parents moved, so a child rides on a falling or carried parent
+    integrate_joints(*this, joints, bodies, h);
+    place_children(*this, joints, bodies, *backend);  // after the parents moved, so a child rides on a falling or carried parent
   }
 }
 

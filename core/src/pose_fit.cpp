@@ -216,7 +216,7 @@ void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& ang
     const double turn = angular.norm() * dt;
     const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
     const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
-    project_push(joints[b.hard_joint], simulated, dt);
+    project_push(def, bodies, joints[b.hard_joint], simulated, dt);
     return;
   }
   b.linear = linear;

@@ -360,7 +360,7 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
   impl_->retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
   impl_->update_box(id.index);
-  if (!impl_->joint_order.empty()) impl_->place_children();
+  if (!impl_->joint_order.empty()) place_children(*impl_, impl_->joints, impl_->bodies, *impl_->backend);
   impl_->refresh_moving_boxes();
 }
 

@@ -232,16 +232,7 @@ struct World::Impl : WorldModel, WorldState {
   // Joints (world_joints.cpp).
   JointId add_joint(Joint j, BodyId parent, BodyId child, const std::string& argument);
   void rebuild_joint_order();
-  Pose parent_pose(const Joint& j) const;
-  Pose joint_child_pose(const Joint& j) const;  // where the coordinate puts the child now
-  void place_children();                        // every hard child from its parent and coordinate
-  void integrate_joints(double h);              // free hard joints: gravity, damping, limits
   void drive_soft_children(double h);           // grasped soft-joint children chase their hand
-  void project_push(Joint& j, const Pose& simulated, double dt);  // eq. 2 motion onto the joint
-  void solve_grasped(Joint& j, const Pose& simulated, double dt); // eq. 4 for a grasped child
-  void read_soft_joint(Joint& j);
-  JointSolveOptions joint_options() const;
-  JointSolver solver_of(const Joint& j) const;
   uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
@@ -315,7 +306,6 @@ struct World::Impl : WorldModel, WorldState {
   InverseInertia inverse_inertia(const Body& b) const;
   void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt);
   StageReport simulate(double dt);
-  StageReport solve_joints(double dt);
   StageReport retake_secondary_hands();
 
   // Step input checks (step_input.cpp): everything is checked before anything changes.
@@ -344,6 +334,27 @@ struct World::Impl : WorldModel, WorldState {
   bool physics_needed(double dt);
   void read_dynamic_bodies();
 };
+
+// Stages of Algorithm 1 as free functions (issue 21 item 2), each in the file named after it: the parameters say
+// what the stage reads (const) and writes. A slot table is passed whole where the stage reads one half of a
+// slot and writes the other (a joint's frames and its coordinate).
+
+// Joints (world_joints.cpp). The pose of a joint's parent (the world origin for kWorldParent), and where the
+// joint's coordinate puts its child now.
+Pose parent_pose(const std::vector<Body>& bodies, const Joint& j);
+Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j);
+// Every hard child from its parent and coordinate, parents first: the child's pose and velocity, and Bullet's copy.
+void place_children(const WorldModel& model, const std::vector<Joint>& joints, std::vector<Body>& bodies,
+                    BulletBackend& backend);
+// One substep of the free hard joints (not held): gravity (none for a supported child), damping, limits.
+void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h);
+// Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the
+// coordinate's rate that gets there over dt, and the solve in the joint's report.
+void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
+// Line 19 (eq. 4): a grasped hard child takes the coordinate nearest where its primary hand holds it, then
+// every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved.
+StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,
+                         const std::vector<HandSlot>& hands, BulletBackend& backend, double dt);
 
 // What a stage returns: its work, or why it had none.
 inline StageReport stage_work(int work, int particles = 0) {

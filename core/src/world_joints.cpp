@@ -101,27 +101,29 @@ uint32_t World::Impl::group_root(uint32_t body) const {
   return body;
 }
 
+namespace {
 // The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
-JointSolver World::Impl::solver_of(const Joint& j) const {
+JointSolver solver_of(const WorldDef& def, const Joint& j) {
 #if HANDSIM_WITH_CERES
   if (def.paper_pipeline) return JointSolver::LmCeres;
 #endif
   return j.solver;
 }
 
-JointSolveOptions World::Impl::joint_options() const {
+JointSolveOptions joint_options(const WorldDef& def) {
   JointSolveOptions o;
   o.max_iterations = def.joint_max_iterations;
   o.continuous = true;  // a hard joint moves continuously: never through a stop (see JointSolveOptions)
   return o;
 }
+}  // namespace
 
-Pose World::Impl::parent_pose(const Joint& j) const {
+Pose parent_pose(const std::vector<Body>& bodies, const Joint& j) {
   return j.parent == kWorldParent ? Pose() : bodies[j.parent].pose;
 }
 
-Pose World::Impl::joint_child_pose(const Joint& j) const {
-  const Pose p = parent_pose(j);
+Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j) {
+  const Pose p = parent_pose(bodies, j);
   switch (j.type) {
     case JointType::Hinge: return hinge_child_pose(j.hinge, p, j.value);
     case JointType::Slider: return slider_child_pose(j.slider, p, j.value);
@@ -191,7 +193,7 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
   Vec3 lo, hi;
   shape_local_bounds(c.shape, lo, hi);
   j.length = 0.5 * (hi - lo).norm();
-  read_coordinate(j, parent_pose(j), c.pose);
+  read_coordinate(j, parent_pose(bodies, j), c.pose);
 
   // Everything validated: from here on the world changes.
   const uint32_t index = allocate_slot(joints, free_joint_slots);
@@ -204,7 +206,7 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
     if (parent_backend >= 0) backend->set_collision(parent_backend, c.backend, false);
     joints[index] = std::move(j);
     rebuild_joint_order();
-    place_children();  // the child snaps onto its joint
+    place_children(*this, joints, bodies, *backend);  // the child snaps onto its joint
   } else {
     switch (j.type) {
       case JointType::Hinge: j.constraint = backend->add_hinge(parent_backend, c.backend, j.hinge); break;
@@ -236,12 +238,13 @@ void World::Impl::rebuild_joint_order() {
 
 // --- placing hard children ---
 
-void World::Impl::place_children() {
-  for (uint32_t k : joint_order) {
+void place_children(const WorldModel& model, const std::vector<Joint>& joints, std::vector<Body>& bodies,
+                    BulletBackend& backend) {
+  for (uint32_t k : model.joint_order) {
     const Joint& j = joints[k];
     Body& c = bodies[j.child];
-    const Pose p = parent_pose(j);
-    c.pose = joint_child_pose(j);
+    const Pose p = parent_pose(bodies, j);
+    c.pose = joint_child_pose(bodies, j);
     // The child's velocity: the parent's rigid motion plus the joint's own.
     Vec3 v = Vec3::Zero(), w = Vec3::Zero();
     if (j.parent != kWorldParent) {
@@ -268,7 +271,7 @@ void World::Impl::place_children() {
     }
     c.linear = v;
     c.angular = w;
-    backend->move_kinematic(c.backend, c.pose);
+    backend.move_kinematic(c.backend, c.pose);
   }
 }
 
@@ -283,14 +286,14 @@ Mat3 cross_matrix(const Vec3& v) {
 }
 }  // namespace
 
-void World::Impl::integrate_joints(double h) {
-  for (uint32_t k : joint_order) {
+void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h) {
+  for (uint32_t k : model.joint_order) {
     Joint& j = joints[k];
     const Body& c = bodies[j.child];
     if (c.grasp.grasped || j.type == JointType::Fixed) continue;  // held: the hand decides (solve_joints)
-    const Vec3 g = c.supported ? Vec3::Zero() : def.gravity;
-    const Pose p = parent_pose(j);
-    const Pose now = joint_child_pose(j);
+    const Vec3 g = c.supported ? Vec3::Zero() : model.def.gravity;
+    const Pose p = parent_pose(bodies, j);
+    const Pose now = joint_child_pose(bodies, j);
     const double m = c.mass;
     if (j.type == JointType::Hinge) {
       // One rotational DOF: I_axis theta'' = torque of gravity about the axis - damping theta'.
@@ -365,15 +368,16 @@ void record(Joint& j, const BallSolveResult& r) {
 // Where the hand wants the child (`simulated`) -> the nearest coordinate (eq. 4), with the rate that gets
 // there over dt. A pushed child gets only the rate, so the push acts like a velocity and gravity and limits
 // still apply (project_push); a grasped child is set there at once (solve_grasped).
-void World::Impl::project_push(Joint& j, const Pose& simulated, double dt) {
-  const Pose p = parent_pose(j);
-  const JointSolveOptions o = joint_options();
+void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt) {
+  const Pose p = parent_pose(bodies, j);
+  const JointSolveOptions o = joint_options(def);
   switch (j.type) {
     case JointType::Hinge:
     case JointType::Slider: {
+      const JointSolver solver = solver_of(def, j);
       const JointSolveResult r = j.type == JointType::Hinge
-                                     ? solve_hinge(solver_of(j), j.hinge, j.vertices, p, simulated, j.value, o)
-                                     : solve_slider(solver_of(j), j.slider, j.vertices, p, simulated, j.value, o);
+                                     ? solve_hinge(solver, j.hinge, j.vertices, p, simulated, j.value, o)
+                                     : solve_slider(solver, j.slider, j.vertices, p, simulated, j.value, o);
       j.rate = (r.value - j.value) / dt;
       record(j, r);
       break;
@@ -390,8 +394,9 @@ void World::Impl::project_push(Joint& j, const Pose& simulated, double dt) {
   }
 }
 
-void World::Impl::solve_grasped(Joint& j, const Pose& simulated, double dt) {
-  project_push(j, simulated, dt);
+namespace {
+void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt) {
+  project_push(def, bodies, j, simulated, dt);
   if (!j.solved) return;
   if (j.type == JointType::Ball) {
     j.rotation = j.solved_rotation;  // the solved rotation itself (re-deriving it from spin * dt would round)
@@ -400,8 +405,8 @@ void World::Impl::solve_grasped(Joint& j, const Pose& simulated, double dt) {
   }
 }
 
-void World::Impl::read_soft_joint(Joint& j) {
-  const Pose p = parent_pose(j), c = bodies[j.child].pose;
+void read_soft_joint(const std::vector<Body>& bodies, Joint& j) {
+  const Pose p = parent_pose(bodies, j), c = bodies[j.child].pose;
   switch (j.type) {
     case JointType::Hinge: j.value = hinge_angle(j.hinge, p, c, j.value); break;
     case JointType::Slider: j.value = slider_displacement(j.slider, p, c); break;
@@ -409,22 +414,24 @@ void World::Impl::read_soft_joint(Joint& j) {
     case JointType::Fixed: break;
   }
 }
+}  // namespace
 
 // --- line 19 of Algorithm 1: grasped children of hard joints get their coordinate from the hand ---
-StageReport World::Impl::solve_joints(double dt) {
+StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,
+                         const std::vector<HandSlot>& hands, BulletBackend& backend, double dt) {
   int live = 0;
-  for (uint32_t k : joint_order) {
+  for (uint32_t k : model.joint_order) {
     Joint& j = joints[k];
     const Body& c = bodies[j.child];
     if (!c.grasp.grasped) continue;
     const Pose simulated = hands[c.grasp.primary.index].palm * c.grasp.primary_relative;
-    solve_grasped(j, simulated, dt);
+    solve_grasped(model.def, bodies, j, simulated, dt);
   }
-  if (!joint_order.empty()) place_children();
+  if (!model.joint_order.empty()) place_children(model, joints, bodies, backend);
   for (Joint& j : joints) {
     if (!j.alive) continue;
     ++live;
-    if (j.model == JointModel::Soft) read_soft_joint(j);
+    if (j.model == JointModel::Soft) read_soft_joint(bodies, j);
   }
   if (live == 0) return stage_skipped(SkipReason::NoJoints);
   return stage_work(live);
@@ -520,7 +527,7 @@ JointState World::joint_state(JointId id) const {
   s.value = j.value;
   s.rate = j.rate;
   s.rotation = j.rotation;
-  const Pose p = w.parent_pose(j), c = w.bodies[j.child].pose;
+  const Pose p = parent_pose(w.bodies, j), c = w.bodies[j.child].pose;
   switch (j.type) {
     case JointType::Hinge: {
       s.anchor = p.transform(j.hinge.pivot_parent);
@@ -581,11 +588,11 @@ void World::set_joint_value(JointId id, double value) {
   j.value = std::clamp(value, lower, upper);
   j.rate = 0;
   if (j.model == JointModel::Hard) {
-    w.place_children();
+    place_children(w, w.joints, w.bodies, *w.backend);
     return;
   }
   Body& c = w.bodies[j.child];
-  c.pose = c.synced_pose = w.joint_child_pose(j);
+  c.pose = c.synced_pose = joint_child_pose(w.bodies, j);
   c.linear = c.angular = Vec3::Zero();
   w.backend->write(c.backend, c.pose, c.linear, c.angular);
 }

@@ -39,7 +39,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Attach, [&] { return w.follow_primary_hands(); });          // lines 10, 14
   stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
   stage(Stage::Dynamics, [&] { return w.simulate(dt); });                  // line 18
-  stage(Stage::Joints, [&] { return w.solve_joints(dt); });                // line 19: eq. 4
+  stage(Stage::Joints, [&] { return solve_joints(w, w.joints, w.bodies, w.hands, *w.backend, dt); });  // line 19: eq. 4
   stage(Stage::Slip, [&] { return w.retake_secondary_hands(); });          // line 20: eq. 5
   w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
   if (w.report.nonfinite_bodies > 0) w.report.warnings |= warning_bit(StepWarning::NonFiniteRecovered);
