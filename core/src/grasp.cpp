@@ -654,9 +654,10 @@ StageReport World::Impl::follow_primary_hands() {
 }
 
 // --- line 20: the second hand's relative pose is re-taken every frame (eq. 5) ---
-StageReport World::Impl::retake_secondary_hands() {
+StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                                   const std::vector<HandSlot>& hands) {
   int slipping = 0;
-  for (uint32_t bi : held_bodies()) {
+  for (uint32_t bi : held) {
     Body& b = bodies[bi];
     if (b.grasp.secondary.is_null()) continue;
     b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;

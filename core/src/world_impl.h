@@ -306,7 +306,6 @@ struct World::Impl : WorldModel, WorldState {
   InverseInertia inverse_inertia(const Body& b) const;
   void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt);
   StageReport simulate(double dt);
-  StageReport retake_secondary_hands();
 
   // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
@@ -355,6 +354,11 @@ void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j
 // every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved.
 StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,
                          const std::vector<HandSlot>& hands, BulletBackend& backend, double dt);
+
+// Grasps (grasp.cpp). Line 20 (eq. 5): each held body (`held`, held_bodies()) that a second hand holds re-takes
+// its pose in that hand's palm frame, so the secondary hand slips along the body instead of dragging it.
+StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                                   const std::vector<HandSlot>& hands);
 
 // What a stage returns: its work, or why it had none.
 inline StageReport stage_work(int work, int particles = 0) {

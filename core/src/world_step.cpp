@@ -40,7 +40,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
   stage(Stage::Dynamics, [&] { return w.simulate(dt); });                  // line 18
   stage(Stage::Joints, [&] { return solve_joints(w, w.joints, w.bodies, w.hands, *w.backend, dt); });  // line 19: eq. 4
-  stage(Stage::Slip, [&] { return w.retake_secondary_hands(); });          // line 20: eq. 5
+  stage(Stage::Slip, [&] { return retake_secondary_hands(w.held_bodies(), w.bodies, w.hands); });  // line 20: eq. 5
   w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
   if (w.report.nonfinite_bodies > 0) w.report.warnings |= warning_bit(StepWarning::NonFiniteRecovered);
   w.time += dt;
