@@ -6,6 +6,7 @@
 #include "hand_view.h"
 
 #include "bullet_particles.h"
+#include "grasp.h"
 #include "handsim/hand.h"
 #include "validate.h"
 
@@ -230,6 +231,17 @@ thumb_opposition 0..1 (1: thumb pad on the index pad); spread; scale. Keywords o
         "The grip `t` s after the hand began to close it over `duration` s (minimum jerk): open for t <= 0, the "
         "grip itself from t >= duration. Every synthetic hand closes onto its object this way.");
   m.attr("GRIP_CLOSING_S") = kGripClosingS;
+  m.def(
+      "capsule_gap",
+      [](py::handle a0, py::handle a1, double ra0, double ra1, py::handle b0, py::handle b1, double rb0, double rb1) {
+        return capsule_gap(to_vec3(a0, "a0"), to_vec3(a1, "a1"), ra0, ra1, to_vec3(b0, "b0"), to_vec3(b1, "b1"), rb0,
+                           rb1);
+      },
+      py::arg("a0"), py::arg("a1"), py::arg("ra0"), py::arg("ra1"), py::arg("b0"), py::arg("b1"), py::arg("rb0"),
+      py::arg("rb1"),
+      "Gap (m) between the surfaces of two capsules round the segments a0 -> a1 and b0 -> b1 (3,), radii changing "
+      "linearly from ra0 to ra1 and rb0 to rb1: the segments' closest points' distance less the radii there; < 0 "
+      "overlapping. A pad is the capsule round a distal -> tip bone with the joint radii (skeleton.pulp_gap).");
   m.def(
       "bind_frame",
       [](py::handle handedness, double scale) { return bind_frame(cast_arg<Handedness>(handedness, "handedness"), scale); },

@@ -214,6 +214,22 @@ GraspEvent GraspTracker::end(ReleaseReason reason) {
 // ---------------------------------------------------------------------------------------------------------
 // Grip span and its history
 
+double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const Vec3& b0, const Vec3& b1, double rb0,
+                   double rb1) {
+  // The closest points a0 + s u, b0 + t v (s, t in 0..1): s from the two lines' normal equations, t the best for that
+  // s, then s the best for that t, each clamped (Ericson, Real-Time Collision Detection 5.1.9, with s always re-taken).
+  // A segment shorter than ~1 nm is a point; (nearly) parallel ones start from s = 0.
+  const Vec3 u = a1 - a0, v = b1 - b0, w = a0 - b0;
+  const double uu = u.dot(u), vv = v.dot(v), uv = u.dot(v), uw = u.dot(w), vw = v.dot(w);
+  const double den = uu * vv - uv * uv;
+  auto unit = [](double x) { return std::clamp(x, 0.0, 1.0); };
+  constexpr double kTiny = 1e-18;
+  double s = den > kTiny ? unit((uv * vw - vv * uw) / den) : 0.0;
+  const double t = vv > kTiny ? unit((uv * s + vw) / vv) : 0.0;
+  s = uu > kTiny ? unit((uv * t - uw) / uu) : 0.0;
+  return (w + s * u - t * v).norm() - (ra0 + s * (ra1 - ra0)) - (rb0 + t * (rb1 - rb0));
+}
+
 double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones) {
   auto joint = [&](int j) { return Vec3(bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
   const Vec3 palm = joint(kPalm);

@@ -112,6 +112,17 @@ class GraspTracker {
 // touched opposite faces with it and the palm; the thumb opposes with its phalanges.
 int rigid_part(const HandModel& model, int particle);
 
+// The gap (m) between the surfaces of two tapered capsules: round the segment a0 -> a1 with a radius changing
+// linearly from ra0 to ra1 along it, and round b0 -> b1 with rb0 .. rb1: the distance between the segments'
+// closest points less the two radii there; < 0 where the capsules overlap. Exact for constant radii; with a taper
+// the surfaces' closest points lie off the axes', and the result exceeds the least gap by at most the radii's
+// change along the two bones (1.4 mm for the default hand's thumb and index pads; CapsuleGap tests), as Python's
+// closure strengths have always measured it. A finger's pad is such a capsule round its distal -> tip bone with the
+// joint radii, so two of them give how far apart the pads are (Python's skeleton.pulp_gap calls this). A segment
+// may be a point.
+double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const Vec3& b0, const Vec3& b1, double rb0,
+                   double rb1);
+
 // The grip span of a hand (m): the four fingertips' distances to the palm joint plus the thumb tip's distance
 // to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
 // pinch shortens it; moving or turning the hand as a whole does not change it.

@@ -722,3 +722,41 @@ def test_hand_bench_times_the_model_build_of_the_default_and_the_study_pick():
     rows = hand_bench.bench_model_build(1)
     assert [r["hand"] for r in rows] == ["default (HandDef())", "3,000 even"]
     assert all(0 < r["median_s"] <= r["p99_s"] for r in rows)
+
+
+def _numpy_pulp_gap(p, r, a0, a1, b0, b1):
+    """The pads' gap as skeleton.pulp_gap computed it in numpy before it called the core (the reference): the
+    segments' closest points (s from the lines, t for that s, s again for that t, each clamped) less the radii."""
+    u, v, w = p[a1] - p[a0], p[b1] - p[b0], p[a0] - p[b0]
+    uu, vv, uv, uw, vw = u @ u, v @ v, u @ v, u @ w, v @ w
+    den = uu * vv - uv * uv
+    s = float(np.clip((uv * vw - vv * uw) / den, 0, 1)) if den > 1e-18 else 0.0
+    t = float(np.clip((uv * s + vw) / vv, 0, 1)) if vv > 1e-18 else 0.0
+    s = float(np.clip((uv * t - uw) / uu, 0, 1)) if uu > 1e-18 else 0.0
+    gap = np.linalg.norm(w + s * u - t * v)
+    return gap - (r[a0] + s * (r[a1] - r[a0])) - (r[b0] + t * (r[b1] - r[b0]))
+
+
+def test_pulp_gap_is_the_cores_capsule_gap_on_synthetic_hands():
+    """skeleton.pulp_gap (the core's capsule_gap, which the grip span uses) equals the numpy formula it replaced on
+    make_hand_frame hands: flat, pinching, curled, spread, scaled, turned, both sides, every finger."""
+    from handsim.adapters import skeleton as sk
+    rng = np.random.default_rng(3)
+    fingers = [(handsim.INDEX_DISTAL, handsim.INDEX_TIP), (handsim.MIDDLE_DISTAL, handsim.MIDDLE_TIP),
+               (handsim.RING_DISTAL, handsim.RING_TIP), (handsim.LITTLE_DISTAL, handsim.LITTLE_TIP)]
+    checked = 0
+    for side in (RIGHT, LEFT):
+        for k in range(25):
+            q = rng.normal(size=4)
+            pose = np.concatenate([rng.uniform(-0.5, 0.5, 3), q / np.linalg.norm(q)])
+            f = handsim.make_hand_frame(side, pose, curl=rng.uniform(0, 1, 5), thumb_opposition=rng.uniform(0, 1),
+                                        spread=rng.uniform(-0.3, 1), scale=rng.uniform(0.8, 1.2))
+            p, r = np.asarray(f.positions), np.asarray(f.radii)
+            for finger, (b0, b1) in enumerate(fingers):
+                want = _numpy_pulp_gap(p, r, handsim.THUMB_DISTAL, handsim.THUMB_TIP, b0, b1)
+                assert sk.pulp_gap(p, r, finger) == pytest.approx(want, abs=1e-12)
+                checked += 1
+    assert checked == 200
+    flat = handsim.make_hand_frame(RIGHT)
+    # The flat hand's thumb-index pad gap, skeleton.py's anchor of pinch 0 (56.8 mm).
+    assert sk.pulp_gap(np.asarray(flat.positions), np.asarray(flat.radii), 0) == pytest.approx(0.05675, abs=1e-5)

@@ -257,26 +257,13 @@ def _grab_angle(p, q) -> float:
     return float(np.mean([math.acos(max(-1.0, min(1.0, float(u @ hand) / n))) for u, n in zip(bones, lengths)]))
 
 
-def _segment_params(a0, a1, b0, b1) -> Tuple[float, float]:
-    """(s, t) in [0, 1] of the closest points a0 + s (a1 - a0), b0 + t (b1 - b0) of two segments."""
-    u, v, w = a1 - a0, b1 - b0, a0 - b0
-    uu, vv, uv, uw, vw = u @ u, v @ v, u @ v, u @ w, v @ w
-    den = uu * vv - uv * uv
-    s = float(np.clip((uv * vw - vv * uw) / den, 0, 1)) if den > 1e-18 else 0.0
-    t = float(np.clip((uv * s + vw) / vv, 0, 1)) if vv > 1e-18 else 0.0
-    s = float(np.clip((uv * t - uw) / uu, 0, 1)) if uu > 1e-18 else 0.0
-    return s, t
-
-
 def pulp_gap(p, r, finger: int) -> float:
     """Distance (m) between the surfaces of the thumb's distal phalanx and finger `finger`'s (0 index .. 3
-    little): capsules round the distal -> tip bones with the joint radii, linear along the bone; < 0 pressed."""
-    a0, a1 = p[_core.THUMB_DISTAL], p[_core.THUMB_TIP]
+    little): capsules round the distal -> tip bones with the joint radii, linear along the bone; < 0 pressed.
+    The core's capsule_gap, the one the grip span's thumb term uses."""
     j0, j1 = _PULPS[finger]
-    s, t = _segment_params(a0, a1, p[j0], p[j1])
-    gap = np.linalg.norm(a0 + s * (a1 - a0) - p[j0] - t * (p[j1] - p[j0]))
-    return float(gap - (r[_core.THUMB_DISTAL] + s * (r[_core.THUMB_TIP] - r[_core.THUMB_DISTAL]))
-                 - (r[j0] + t * (r[j1] - r[j0])))
+    return _core.capsule_gap(p[_core.THUMB_DISTAL], p[_core.THUMB_TIP], r[_core.THUMB_DISTAL], r[_core.THUMB_TIP],
+                             p[j0], p[j1], r[j0], r[j1])
 
 
 def _anchors():
