@@ -44,9 +44,12 @@
  * 2.5: handsim_world_settings gained skin_depth and skin_pressure at its end (the contact skin). Like
  * handsim_grasp_settings' squeeze_distance, pass_depth and slip_distance earlier in 2.x, a layout change made
  * within this session's 2.x, before any 2.x release, so no older 2.x host exists; after a release it would be a
- * major. */
+ * major.
+ * 2.6: handsim_world_settings' reserved slot became push_model (HANDSIM_PUSH_*, how a hand moves a free body it
+ * touches; docs/grasp.md "Push models"): the layout is unchanged, and 0, what a 2.5 host leaves there, is
+ * HANDSIM_PUSH_FIT, the 2.5 behaviour. */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 5
+#define HANDSIM_ABI_VERSION_MINOR 6
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -94,6 +97,8 @@ enum { HANDSIM_TERMINATION_CONVERGED = 0, HANDSIM_TERMINATION_MAX_ITERATIONS = 1
 enum { HANDSIM_LEFT = 0, HANDSIM_RIGHT = 1 };
 enum { HANDSIM_SAMPLING_RANDOM = 0, HANDSIM_SAMPLING_EVEN = 1 };
 enum { HANDSIM_CONTACTS_CLOSED_FORM = 0, HANDSIM_CONTACTS_BULLET_OBJECTS = 1 };
+/* WorldDef::push_model: eq. 2's fit as velocity (the default). */
+enum { HANDSIM_PUSH_FIT = 0 };
 enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_EVENT_GRASP_BEGIN = 2,
        HANDSIM_EVENT_GRASP_END = 3 };
 enum { HANDSIM_REASON_NONE = 0, HANDSIM_REASON_RELEASED = 1, HANDSIM_REASON_TRACKING_LOST = 2,
@@ -158,7 +163,7 @@ typedef struct handsim_world_settings {
   int32_t particle_contacts;     /* HANDSIM_CONTACTS_* */
   int32_t paper_pipeline;        /* bool: every stage every step, as the paper did (a benchmark baseline) */
   int32_t render_threads;        /* 1..64 threads skin the render mesh when it is read (bit-identical to one) */
-  int32_t reserved;
+  int32_t push_model;            /* HANDSIM_PUSH_*: how a hand moves a free body it touches (2.5: reserved, 0) */
   double skin_depth;             /* m: a particle's overlap up to this presses the body as finger pulp (0: off) */
   double skin_pressure;          /* Pa: the pulp's pressure at skin_depth of compression */
 } handsim_world_settings;

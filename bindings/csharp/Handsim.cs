@@ -31,6 +31,7 @@ namespace Handsim
     public enum HandSide { Left = 0, Right = 1 }
     public enum ParticleSampling { Random = 0, Even = 1 }
     public enum ParticleContacts { ClosedForm = 0, BulletObjects = 1 }
+    public enum PushModel { Fit = 0 }
     public enum EventType { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 }
     public enum EventReason { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 }
     public enum Stage { Skinning = 0, Contacts = 1, Deformation = 2, Grasp = 3, Attach = 4, PoseFit = 5, Dynamics = 6,
@@ -216,7 +217,7 @@ namespace Handsim
         public ParticleContacts ParticleContacts;
         public Bool32 PaperPipeline;
         public int RenderThreads;
-        public int Reserved;
+        public PushModel PushModel;  // how a hand moves a free body it touches (ABI 2.5: reserved, 0 = Fit)
         public double SkinDepth;     // m: a particle's overlap up to this presses the body as finger pulp (0: off)
         public double SkinPressure;  // Pa: the pulp's pressure at SkinDepth of compression
 

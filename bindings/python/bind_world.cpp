@@ -107,6 +107,9 @@ void bind_defs(py::module_& m) {
   flag_property(gs, "across_parts", &GraspSettings::across_parts, "GraspSettings.across_parts",
                 "eq. 3's opposing pair must come from two rigid parts of the hand (palm, phalanges)");
   bind_enum<ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.");
+  bind_enum<PushModel>(m, "PushModel",
+                       "How a hand moves a free body it touches but does not hold (docs/grasp.md \"Push models\"): "
+                       "FIT, eq. 2 as velocity (the default).");
 
   py::class_<WorldDef> wd(m, "WorldDef", "World settings (gravity, fixed substep, ground).");
   wd.def(py::init([](py::kwargs kw) { return from_kwargs<WorldDef>(kw, "WorldDef"); }))
@@ -121,7 +124,9 @@ void bind_defs(py::module_& m) {
       .def_readwrite("skin_depth", &WorldDef::skin_depth,
                      "m: a particle's overlap up to this is finger pulp pressing the body; 0: off (eq. 2 only)")
       .def_readwrite("skin_pressure", &WorldDef::skin_pressure,
-                     "Pa: the pulp's pressure at skin_depth of compression (it grows linearly up to it)");
+                     "Pa: the pulp's pressure at skin_depth of compression (it grows linearly up to it)")
+      .def_readwrite("push_model", &WorldDef::push_model,
+                     "PushModel: how a hand moves a free body it touches but does not hold; FIT (the default)");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
   flag_property(wd, "ground", &WorldDef::ground, "WorldDef.ground");
   flag_property(wd, "paper_pipeline", &WorldDef::paper_pipeline, "WorldDef.paper_pipeline",

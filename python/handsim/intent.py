@@ -671,8 +671,9 @@ def judge_rates(track: Track, particles: Particles, settings, hand_defs, rates=R
 
 # --- rules, recordings, report ----------------------------------------------------------------------------
 
-# WorldDef fields a rule may set besides the GraspSettings: the contact skin (docs/grasp.md "First touch").
-RULE_WORLD_FIELDS = ("skin_depth", "skin_pressure")
+# WorldDef fields a rule may set besides the GraspSettings: the contact skin (docs/grasp.md "First touch") and
+# the push model (docs/grasp.md "Push models"; by name: push_model=physical).
+RULE_WORLD_FIELDS = ("skin_depth", "skin_pressure", "push_model")
 
 
 def parse_rule(spec: str) -> Tuple[str, object]:
@@ -707,6 +708,11 @@ def parse_rule(spec: str) -> Tuple[str, object]:
                 if value.strip().lower() not in ("true", "false", "1", "0"):
                     raise ValueError(value)
                 parsed = value.strip().lower() in ("true", "1")
+            elif hasattr(type(current), "__members__"):  # an enum, by name
+                members = type(current).__members__
+                if value.strip().upper() not in members:
+                    raise ValueError(f"not one of {', '.join(m.lower() for m in members)}")
+                parsed = members[value.strip().upper()]
             else:
                 parsed = type(current)(value)
             setattr(target, key, parsed)

@@ -201,7 +201,7 @@ static void test_shapes_and_joints(void) {
 
   MUST(handsim_world_settings_default(&settings));
   CHECK(settings.gravity.y == -9.81 && settings.fixed_substep == 1.0 / 240.0 && settings.ground == 1 &&
-            settings.skin_depth == 0 && settings.skin_pressure == 20e3,
+            settings.skin_depth == 0 && settings.skin_pressure == 20e3 && settings.push_model == HANDSIM_PUSH_FIT,
         "the defaults are not the C++ ones");
   settings.solver_iterations = 20;
   MUST(handsim_world_create(&settings, &world));
@@ -752,6 +752,9 @@ static void test_bad_inputs(void) {
   MUST(handsim_world_settings_default(&settings));
   settings.particle_contacts = 5;
   REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.particle_contacts");
+  MUST(handsim_world_settings_default(&settings));
+  settings.push_model = 2;
+  REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.push_model");
 
   /* the world still steps after all that, exactly as before */
   MUST(handsim_step(world, SCENARIO_DT, frames, 1));

@@ -177,4 +177,14 @@ TEST(FirstTouch, SkinSettingsOutsideTheirRangeAreRefused) {
         },
         Error);
   }
+  for (int bad : {-1, 1}) {
+    WorldDef def;
+    def.push_model = PushModel(bad);
+    EXPECT_THROW(
+        try { World w(def); } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("world.push_model"), std::string::npos) << e.what();
+          throw;
+        },
+        Error);
+  }
 }

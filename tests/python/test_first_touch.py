@@ -53,3 +53,11 @@ def test_skin_settings_round_trip_and_are_checked():
         handsim.World(handsim.WorldDef(skin_depth=0.1))
     with pytest.raises(ValueError, match=r"world\.skin_pressure"):
         handsim.World(handsim.WorldDef(skin_pressure=-1.0))
+
+
+def test_push_model_round_trips_and_is_checked():
+    assert handsim.WorldDef().push_model == handsim.PushModel.FIT
+    d = handsim.WorldDef(push_model=handsim.PushModel.FIT)
+    back = recording.world_def_from_dict(recording.world_def_to_dict(d))
+    assert back.push_model == handsim.PushModel.FIT
+

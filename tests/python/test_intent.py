@@ -165,6 +165,10 @@ def test_bad_rules_name_the_field():
         intent.parse_rule("skin:skin_depth=abc")
     with pytest.raises(ValueError, match=r"world.skin_depth"):
         intent.parse_rule("skin:skin_depth=1")
+    name, w = intent.parse_rule("fit:push_model=fit")  # the push model, by name
+    assert intent._world_def_with(w).push_model == handsim.PushModel.FIT
+    with pytest.raises(ValueError, match=r"WorldDef.push_model: bad value 'shove'"):
+        intent.parse_rule("physical:push_model=shove")
 
 
 def test_the_cli_writes_nowhere_without_out(tmp_path, capsys):

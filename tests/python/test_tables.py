@@ -14,7 +14,7 @@ def test_every_enum_value_of_the_core_table_is_named_in_python():
     for type_name, _cpp_name, value, upper, constant in rows:
         by_type[type_name][upper] = value
         assert constant.startswith("HANDSIM_")
-    assert len(by_type) == 15
+    assert len(by_type) == 16
     for type_name, values in by_type.items():
         cls = getattr(handsim, type_name)
         assert {name: int(v) for name, v in cls.__members__.items()} == values, type_name

@@ -40,7 +40,8 @@
   X(WorldDef, paper_pipeline)                                                                             \
   X(WorldDef, render_threads)                                                                             \
   X(WorldDef, skin_depth)                                                                                 \
-  X(WorldDef, skin_pressure)
+  X(WorldDef, skin_pressure)                                                                              \
+  X(WorldDef, push_model)
 
 #define HANDSIM_FIELDS_BODY_DEF(X)                                                                        \
   X(BodyDef, shape)                                                                                       \

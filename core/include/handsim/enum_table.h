@@ -74,6 +74,11 @@
   /* one Bullet collision object per particle, as in the paper (a baseline; same contacts, ~100x cost) */ \
   X(ParticleContacts, BulletObjects, 1, BULLET_OBJECTS, HANDSIM_CONTACTS_BULLET_OBJECTS)
 
+/* How a hand moves a free body it touches but does not hold (WorldDef::push_model; docs/grasp.md "Push models"). */
+#define HANDSIM_ENUM_PUSH_MODEL(X)                                                                        \
+  /* eq. 2 (default): the hands' velocity at the body plus the least-squares fit of the overlap, per frame */ \
+  X(PushModel, Fit, 0, FIT, HANDSIM_PUSH_FIT)
+
 #define HANDSIM_ENUM_BODY_MOTION(X)                                                                       \
   X(BodyMotion, Static, 0, STATIC, HANDSIM_MOTION_STATIC)                                                 \
   X(BodyMotion, Dynamic, 1, DYNAMIC, HANDSIM_MOTION_DYNAMIC)                                              \
@@ -157,6 +162,7 @@
   HANDSIM_ENUM_JOINT_TYPE(X)                                                                              \
   HANDSIM_ENUM_STAGE(X)                                                                                   \
   HANDSIM_ENUM_SKIP_REASON(X)                                                                             \
-  HANDSIM_ENUM_STEP_WARNING(X)
+  HANDSIM_ENUM_STEP_WARNING(X)                                                                            \
+  HANDSIM_ENUM_PUSH_MODEL(X)
 
 #endif /* HANDSIM_ENUM_TABLE_H */

@@ -17,6 +17,7 @@
 namespace handsim {
 
 HANDSIM_DECLARE_ENUM(ParticleContacts, HANDSIM_ENUM_PARTICLE_CONTACTS);
+HANDSIM_DECLARE_ENUM(PushModel, HANDSIM_ENUM_PUSH_MODEL);
 
 // One hand's input to a step: the frame that drives the hand `hand` (World::step).
 struct HandInput {
@@ -63,6 +64,11 @@ struct WorldDef {
   // touches), well below the ~0.5 MPa where pressure starts to hurt.
   double skin_depth = 0;       // m, 0 .. 0.05
   double skin_pressure = 20e3; // Pa, 0 .. 1e6
+  // How a hand moves a free body it touches but does not hold (docs/grasp.md "Push models"). Fit (default):
+  // eq. 2, the touching hands' velocity at the body plus the least-squares fit of the overlap, both given to the
+  // body as velocity.
+  using PushModel = handsim::PushModel;
+  PushModel push_model = PushModel::Fit;
 };
 
 struct BodyDef {
