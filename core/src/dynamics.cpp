@@ -6,55 +6,64 @@
 #include <cmath>
 
 namespace handsim {
+namespace {
 
-StageReport World::Impl::simulate(double dt) {
-  const double h = def.fixed_substep;
-  accumulator += dt;
-  // The small tolerance keeps dt = 4h from yielding 3 substeps through rounding.
-  int n = int(std::floor(accumulator / h + 1e-9));
-  if (n > def.max_substeps) {
-    n = def.max_substeps;
-    report.dropped_seconds = accumulator - n * h;
-    report.warnings |= warning_bit(StepWarning::SubstepsDropped);
-    accumulator = n * h;  // drop what cannot be caught up
-  }
-  const bool physics = n > 0 && physics_needed(dt);
-  for (int i = 0; i < n; ++i) substep(h, i, n, physics);
-  accumulator = std::max(0.0, accumulator - n * h);
-  if (n > 0)
-    for (uint32_t bi : held_bodies())
-      if (bodies[bi].motion == BodyMotion::Kinematic && !bodies[bi].jointed()) bodies[bi].synced_pose = bodies[bi].pose;
-  report.substeps = n;
-  report.bullet = physics;
-  if (n == 0) return stage_skipped(SkipReason::BelowSubstep);
-  return stage_work(n);
-}
-
-void World::Impl::substep(double h, int i, int n, bool physics) {
+// Substep i of n (h seconds each); Bullet runs only when `physics` (physics_needed), else it idles.
+void substep(const WorldModel& model, WorldState& state, std::vector<Body>& bodies, std::vector<Joint>& joints,
+             const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
+             const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, double h, int i, int n, bool physics) {
   // Kinematic bodies glide from the pose Bullet last saw to their target over the frame's substeps, so
   // Bullet derives the right velocity for pushing free bodies. (Declared kinematic bodies only move through
   // set_body_pose, which syncs them; the held ones are the gliders.)
   const double s = double(i + 1) / n;
-  for (uint32_t bi : held_bodies()) {
+  for (uint32_t bi : held) {
     Body& b = bodies[bi];
     if (b.motion != BodyMotion::Kinematic || b.jointed()) continue;
     if (!physics && i + 1 < n) continue;  // nothing sees the glide; only where it ends
     Pose p{b.synced_pose.position + s * (b.pose.position - b.synced_pose.position),
            b.synced_pose.orientation.slerp(s, b.pose.orientation)};
-    backend->move_kinematic(b.backend, i + 1 == n ? b.pose : p);
+    backend.move_kinematic(b.backend, i + 1 == n ? b.pose : p);
   }
-  drive_soft_children(h);
+  drive_soft_children(held, bodies, hands, backend, h);
   if (physics) {
-    backend->step(h);
-    read_dynamic_bodies();
+    backend.step(h);
+    read_dynamic_bodies(state, bodies, backend, dynamic, boxes);
   } else {
-    backend->idle(h);
-    ++idle_substeps;
+    backend.idle(h);
+    ++state.idle_substeps;
   }
-  if (!joint_order.empty()) {
-    integrate_joints(*this, joints, bodies, h);
-    place_children(*this, joints, bodies, *backend);  // after the parents moved, so a child rides on a falling or carried parent
+  if (!model.joint_order.empty()) {
+    integrate_joints(model, joints, bodies, h);
+    place_children(model, joints, bodies, backend);  // after the parents moved, so a child rides on a falling or carried parent
   }
+}
+
+}  // namespace
+
+StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Body>& bodies, std::vector<Joint>& joints,
+                     const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
+                     const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, StepReport& report, double dt) {
+  const double h = model.def.fixed_substep;
+  state.accumulator += dt;
+  // The small tolerance keeps dt = 4h from yielding 3 substeps through rounding.
+  int n = int(std::floor(state.accumulator / h + 1e-9));
+  if (n > model.def.max_substeps) {
+    n = model.def.max_substeps;
+    report.dropped_seconds = state.accumulator - n * h;
+    report.warnings |= warning_bit(StepWarning::SubstepsDropped);
+    state.accumulator = n * h;  // drop what cannot be caught up
+  }
+  const bool physics = n > 0 && physics_needed(model, state, bodies, joints, backend, held, dynamic, boxes, dt);
+  for (int i = 0; i < n; ++i)
+    substep(model, state, bodies, joints, hands, backend, held, dynamic, boxes, h, i, n, physics);
+  state.accumulator = std::max(0.0, state.accumulator - n * h);
+  if (n > 0)
+    for (uint32_t bi : held)
+      if (bodies[bi].motion == BodyMotion::Kinematic && !bodies[bi].jointed()) bodies[bi].synced_pose = bodies[bi].pose;
+  report.substeps = n;
+  report.bullet = physics;
+  if (n == 0) return stage_skipped(SkipReason::BelowSubstep);
+  return stage_work(n);
 }
 
 }  // namespace handsim

@@ -159,7 +159,7 @@ BodyId World::add_body(const BodyDef& in) {
   b.backend = w.backend->add(def, b.motion);
   ++w.body_version;
   ++w.motion_version;
-  w.update_box(index);
+  w.update_box(w.bodies, index);
   return {index, b.generation};
 }
 
@@ -184,7 +184,7 @@ void World::remove_body(BodyId id) {
   release_slot(w.bodies, w.free_body_slots, id.index);
   ++w.body_version;
   ++w.motion_version;
-  w.update_box(id.index);
+  w.update_box(w.bodies, id.index);
 }
 
 bool World::contains(BodyId id) const {
@@ -361,7 +361,7 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
   // Without this the attach stage would put a held body straight back into the hand.
   impl_->retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
-  impl_->update_box(id.index);
+  impl_->update_box(impl_->bodies, id.index);
   if (!impl_->joint_order.empty()) place_children(*impl_, impl_->joints, impl_->bodies, *impl_->backend);
   impl_->refresh_moving_boxes();
 }

@@ -17,7 +17,7 @@ constexpr double kWakeMargin = 0.05;
 
 }  // namespace
 
-void World::Impl::update_box(uint32_t bi) {
+void BodyBoxes::update_box(const std::vector<Body>& bodies, uint32_t bi) {
   if (body_boxes.size() < 6 * bodies.size()) body_boxes.resize(6 * bodies.size());
   double* box = &body_boxes[6 * bi];
   const Body& b = bodies[bi];
@@ -69,8 +69,8 @@ void World::Impl::sort_boxes() const {
 // (read_dynamic_bodies), bodies the API moves in set_body_pose / add_body.
 void World::Impl::refresh_moving_boxes() {
   if (body_boxes.size() < 6 * bodies.size()) body_boxes.resize(6 * bodies.size());
-  for (uint32_t bi : held_bodies()) update_box(bi);
-  for (uint32_t k : joint_order) update_box(joints[k].child);
+  for (uint32_t bi : held_bodies()) update_box(bodies, bi);
+  for (uint32_t k : joint_order) update_box(bodies, joints[k].child);
 }
 
 // The broadphase: the live bodies whose box overlaps [lo, hi] grown by `margin`, in slot order (out), or
@@ -125,13 +125,16 @@ const std::vector<uint32_t>& World::Impl::dynamic_bodies() {
 // since its last step (a push, a release, a teleport, a new body), or a kinematic body that moves this frame
 // comes near a dynamic one (Bullet would wake it). Otherwise a Bullet step changes no dynamic body, and the
 // substeps only integrate the hard joints.
-bool World::Impl::physics_needed(double dt) {
-  if (def.paper_pipeline || awake_bodies > 0 || backend->woken()) return true;
+bool physics_needed(const WorldModel& model, const WorldState& state, const std::vector<Body>& bodies,
+                    const std::vector<Joint>& joints, const BulletBackend& backend,
+                    const std::vector<uint32_t>& held, const std::vector<uint32_t>& dyn,
+                    const BodyBoxes& boxes, double dt) {
+  if (model.def.paper_pipeline || state.awake_bodies > 0 || backend.woken()) return true;
   // Soft joints (the Bullet baseline) are driven by writes inside the substeps, after this decision.
   for (const Joint& j : joints)
     if (j.alive && j.model == JointModel::Soft) return true;
-  const std::vector<uint32_t>& dyn = dynamic_bodies();
   if (dyn.empty()) return false;
+  const std::vector<double>& body_boxes = boxes.body_boxes;
   auto near_dynamic = [&](const Body& k) {
     Vec3 lo, hi;
     shape_world_bounds(k.shape, k.pose, lo, hi);
@@ -147,26 +150,27 @@ bool World::Impl::physics_needed(double dt) {
         return true;
     return false;
   };
-  for (uint32_t bi : held_bodies())
+  for (uint32_t bi : held)
     if (near_dynamic(bodies[bi])) return true;
-  for (uint32_t k : joint_order)
+  for (uint32_t k : model.joint_order)
     if (near_dynamic(bodies[joints[k].child])) return true;
   return false;
 }
 
 // After a Bullet substep: the state of every dynamic body it may have moved. A body asleep now that was
 // already read asleep has not moved since (Bullet does not integrate sleepers), so it is skipped.
-void World::Impl::read_dynamic_bodies() {
-  awake_bodies = 0;
-  for (uint32_t bi : dynamic_bodies()) {
+void read_dynamic_bodies(WorldState& state, std::vector<Body>& bodies, BulletBackend& backend,
+                         const std::vector<uint32_t>& dynamic, BodyBoxes& boxes) {
+  state.awake_bodies = 0;
+  for (uint32_t bi : dynamic) {
     Body& b = bodies[bi];
-    const bool awake = backend->awake(b.backend);
-    awake_bodies += awake;
+    const bool awake = backend.awake(b.backend);
+    state.awake_bodies += awake;
     if (!awake && b.read_asleep) continue;
     b.read_asleep = !awake;
     Pose pose;
     Vec3 linear, angular;
-    backend->read(b.backend, pose, linear, angular);
+    backend.read(b.backend, pose, linear, angular);
     if (pose.position.allFinite() && pose.orientation.coeffs().allFinite() && linear.allFinite() &&
         angular.allFinite()) {
       b.pose = pose;
@@ -176,11 +180,11 @@ void World::Impl::read_dynamic_bodies() {
       // Safety net: the fuzz driver found Bullet returning NaN for two deeply overlapping, fast-spinning
       // boxes. The body keeps its last finite pose, at rest, instead of poisoning the world.
       b.linear = b.angular = Vec3::Zero();
-      backend->write(b.backend, b.pose, b.linear, b.angular);
+      backend.write(b.backend, b.pose, b.linear, b.angular);
       b.read_asleep = false;
-      ++nonfinite_recoveries;
+      ++state.nonfinite_recoveries;
     }
-    update_box(bi);
+    boxes.update_box(bodies, bi);
   }
 }
 

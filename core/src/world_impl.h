@@ -191,10 +191,22 @@ struct WorldState {
   uint64_t idle_substeps = 0;         // substeps in which Bullet was skipped (nothing awake)
 };
 
+// Every body slot's world bounds (world_activity.cpp), 6 doubles a slot (lo xyz, hi xyz; empty for a dead slot) in
+// one flat array: derived from the poses so that the hand-body broadphase scans it instead of the bodies.
+struct BodyBoxes {
+  std::vector<double> body_boxes;
+  mutable std::vector<uint32_t> box_order;  // sweep-and-prune order of body_boxes (sort_boxes)
+  mutable std::vector<double> box_lo_x;
+  mutable double widest_box_x = 0;
+  mutable bool box_order_dirty = true;
+
+  void update_box(const std::vector<Body>& bodies, uint32_t body);  // after `body` moved, was added or removed
+};
+
 // The world: its model and state, the slot tables (each slot both halves, world_impl.h above), Bullet (a
 // service that keeps its own copy, "The core owns the state" in docs/design.md), the step's output, and what
 // is derived from the state to make a step cheap (world_activity.cpp) or is scratch.
-struct World::Impl : WorldModel, WorldState {
+struct World::Impl : WorldModel, WorldState, BodyBoxes {
   std::unique_ptr<BulletBackend> backend;
   std::vector<Body> bodies;
   std::vector<Joint> joints;
@@ -204,14 +216,8 @@ struct World::Impl : WorldModel, WorldState {
   // that removals raised after it, so a caller who reads events() after each step sees those too.
   size_t step_events = 0;
   StepReport report;  // of the last step (last_step)
-  // What moves (world_activity.cpp). body_boxes: every body slot's world bounds, 6 doubles (lo xyz, hi xyz;
-  // empty for a dead slot), in one flat array: the hand-body broadphase scans it instead of the bodies. The
-  // lists are what the per-step passes walk instead of every body, so settled and static bodies cost nothing.
-  std::vector<double> body_boxes;
-  mutable std::vector<uint32_t> box_order;  // sweep-and-prune order of body_boxes (sort_boxes)
-  mutable std::vector<double> box_lo_x;
-  mutable double widest_box_x = 0;
-  mutable bool box_order_dirty = true;
+  // What moves (world_activity.cpp; the body boxes are BodyBoxes): the lists the per-step passes walk instead of
+  // every body, so settled and static bodies cost nothing.
   std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
   std::vector<uint32_t> released;  // bodies whose just_released is set
   std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
@@ -232,7 +238,6 @@ struct World::Impl : WorldModel, WorldState {
   // Joints (world_joints.cpp).
   JointId add_joint(Joint j, BodyId parent, BodyId child, const std::string& argument);
   void rebuild_joint_order();
-  void drive_soft_children(double h);           // grasped soft-joint children chase their hand
   uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
@@ -305,7 +310,6 @@ struct World::Impl : WorldModel, WorldState {
   SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt) const;
   InverseInertia inverse_inertia(const Body& b) const;
   void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt);
-  StageReport simulate(double dt);
 
   // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
@@ -320,18 +324,14 @@ struct World::Impl : WorldModel, WorldState {
   uint64_t model_fingerprint() const;
   std::string inconsistency() const;
   void rebuild_backend(const BackendState& state);
-  void substep(double h, int i, int n, bool physics);
 
   // What moves (world_activity.cpp).
-  void update_box(uint32_t body);
   void refresh_moving_boxes();
   bool box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const;
   bool bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const;
   void sort_boxes() const;
   const std::vector<uint32_t>& held_bodies();
   const std::vector<uint32_t>& dynamic_bodies();
-  bool physics_needed(double dt);
-  void read_dynamic_bodies();
 };
 
 // Stages of Algorithm 1 as free functions (issue 21 item 2), each in the file named after it: the parameters say
@@ -350,10 +350,31 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
 // Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the
 // coordinate's rate that gets there over dt, and the solve in the joint's report.
 void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
+// A grasped soft-joint child (`held`: held_bodies()) chases its primary hand with the velocity that reaches it
+// in one substep h; the Bullet constraint pulls it back.
+void drive_soft_children(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                         const std::vector<HandSlot>& hands, BulletBackend& backend, double h);
 // Line 19 (eq. 4): a grasped hard child takes the coordinate nearest where its primary hand holds it, then
 // every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved.
 StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,
                          const std::vector<HandSlot>& hands, BulletBackend& backend, double dt);
+
+// What moves (world_activity.cpp), for the dynamics stage. Whether this frame's substeps must run Bullet, and
+// after a Bullet substep, the dynamic bodies (`dynamic`: dynamic_bodies()) read back with their boxes.
+bool physics_needed(const WorldModel& model, const WorldState& state, const std::vector<Body>& bodies,
+                    const std::vector<Joint>& joints, const BulletBackend& backend,
+                    const std::vector<uint32_t>& held, const std::vector<uint32_t>& dynamic,
+                    const BodyBoxes& boxes, double dt);
+void read_dynamic_bodies(WorldState& state, std::vector<Body>& bodies, BulletBackend& backend,
+                         const std::vector<uint32_t>& dynamic, BodyBoxes& boxes);
+
+// Line 18 (dynamics.cpp): the frame's fixed substeps (the accumulator carries the rest; the step's report gets
+// the substeps, whether Bullet ran and a dropped backlog). Each glides the held bodies (`held`: held_bodies())
+// towards their hand, drives the soft-joint children, runs Bullet (or idles it when nothing dynamic can move)
+// and reads the dynamic bodies (`dynamic`: dynamic_bodies()) back, then integrates and places the hard joints.
+StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Body>& bodies, std::vector<Joint>& joints,
+                     const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
+                     const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, StepReport& report, double dt);
 
 // Grasps (grasp.cpp). Line 20 (eq. 5): each held body (`held`, held_bodies()) that a second hand holds re-takes
 // its pose in that hand's palm frame, so the secondary hand slips along the body instead of dragging it.

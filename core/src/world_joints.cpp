@@ -341,14 +341,15 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
 
 // --- soft joints: a grasped child chases its hand with a velocity, the constraint pulls back ---
 
-void World::Impl::drive_soft_children(double h) {
-  for (uint32_t bi : held_bodies()) {
+void drive_soft_children(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                         const std::vector<HandSlot>& hands, BulletBackend& backend, double h) {
+  for (uint32_t bi : held) {
     Body& b = bodies[bi];
     if (b.soft_joint < 0) continue;
     const Pose target = hands[b.grasp.primary.index].palm * b.grasp.primary_relative;
     b.linear = (target.position - b.pose.position) / h;
     b.angular = rotation_vector(target.orientation * b.pose.orientation.conjugate()) / h;
-    backend->write(b.backend, b.pose, b.linear, b.angular);
+    backend.write(b.backend, b.pose, b.linear, b.angular);
   }
 }
 

@@ -551,7 +551,7 @@ void World::Impl::restore_state(const uint8_t* data, size_t size, bool keep_even
     if (!bodies[i].alive) continue;
     if (bodies[i].grasp.grasped) held.push_back(i);
     if (bodies[i].just_released) released.push_back(i);
-    update_box(i);
+    update_box(bodies, i);
   }
   box_order_dirty = true;
   ++motion_version;

@@ -38,7 +38,9 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
   stage(Stage::Attach, [&] { return w.follow_primary_hands(); });          // lines 10, 14
   stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
-  stage(Stage::Dynamics, [&] { return w.simulate(dt); });                  // line 18
+  stage(Stage::Dynamics, [&] {                                              // line 18
+    return simulate(w, w, w.bodies, w.joints, w.hands, *w.backend, w.held_bodies(), w.dynamic_bodies(), w, w.report, dt);
+  });
   stage(Stage::Joints, [&] { return solve_joints(w, w.joints, w.bodies, w.hands, *w.backend, dt); });  // line 19: eq. 4
   stage(Stage::Slip, [&] { return retake_secondary_hands(w.held_bodies(), w.bodies, w.hands); });  // line 20: eq. 5
   w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
