@@ -192,16 +192,17 @@ struct Busy {
   JewelryBox box;
   BodyId a, b, c;
   JointId soft, hard;
+  HandId right_hand, left_hand;
   int frame = 0;
 
   Busy() {
     box = build_jewelry_box(world);
     HandDef right;
     right.particle_count = 150;
-    world.add_hand(right);
+    right_hand = world.add_hand(right);
     HandDef left = right;
     left.handedness = Handedness::Left;
-    world.add_hand(left);
+    left_hand = world.add_hand(left);
     a = world.add_body(cube(Vec3(0.6, 0.3, 0.2)));
     b = world.add_body(cube(Vec3(0.6, 0.5, 0.2)));
     c = world.add_body(cube(Vec3(-0.6, 0.5, 0.2)));
@@ -226,7 +227,9 @@ struct Busy {
     d.pose.position = at;
     return d;
   }
-  void advance() { world.step(kDt, scenario_frames(box, world, frame++)); }
+  // scenario_frames' right and left frame, to their hands.
+  std::vector<HandInput> inputs(const std::vector<HandFrame>& f) const { return {{right_hand, f[0]}, {left_hand, f[1]}}; }
+  void advance() { world.step(kDt, inputs(scenario_frames(box, world, frame++))); }
 
   // Runs `call`; rejected: named and nothing changed; accepted: finite, then `undo`.
   // Returns whether it was rejected.
@@ -345,23 +348,23 @@ TEST(AllOrNothing, SettersRemovalsAndStep) {
     for (const Vec3& p : extremes(frames[0].joints[size_t(joint)].position)) {
       std::vector<HandFrame> bad = frames;
       bad[0].joints[size_t(joint)].position = p;
-      busy.attempt("step frame position", [&] { w.step(kDt, bad); });
+      busy.attempt("step frame position", [&] { w.step(kDt, busy.inputs(bad)); });
     }
     for (const Quat& q : extremes(frames[1].joints[size_t(joint)].orientation)) {
       std::vector<HandFrame> bad = frames;
       bad[1].joints[size_t(joint)].orientation = q;
-      busy.attempt("step frame orientation", [&] { w.step(kDt, bad); });
+      busy.attempt("step frame orientation", [&] { w.step(kDt, busy.inputs(bad)); });
     }
     for (double r : extremes(0.0)) {
       std::vector<HandFrame> bad = frames;
       bad[0].joints[size_t(joint)].radius = r;
-      busy.attempt("step frame radius", [&] { w.step(kDt, bad); });
+      busy.attempt("step frame radius", [&] { w.step(kDt, busy.inputs(bad)); });
     }
   }
   for (Handedness h : extremes(Handedness::Right)) {
     std::vector<HandFrame> bad = frames;
     bad[0].handedness = h;
-    EXPECT_TRUE(busy.attempt("step frame handedness", [&] { w.step(kDt, bad); }));
+    EXPECT_TRUE(busy.attempt("step frame handedness", [&] { w.step(kDt, busy.inputs(bad)); }));
   }
   busy.advance();
   expect_finite(w, "after the walk");
