@@ -80,7 +80,7 @@ TEST(Bounds, EveryFieldOutsideItsRangeIsRejectedNamingItAndChangesNothing) {
     return [edit](World& w, const JewelryBox& box) {
       HandFrame f = make_hand_frame(Handedness::Right, box.lid_pinch_palm(w, Handedness::Right, 0));
       edit(f);
-      w.step(kDt, {f});
+      w.step(kDt, {{w.hands().front(), f}});  // the world's one hand
     };
   };
   const std::vector<Case> cases = {
@@ -147,8 +147,8 @@ TEST(Bounds, EveryFieldOutsideItsRangeIsRejectedNamingItAndChangesNothing) {
       {"box overhang 1e308", box_def([](JewelryBoxDef& d) { d.lid_overhang = 1e308; }), "jewelry_box.lid_overhang"},
       {"box friction -1", box_def([](JewelryBoxDef& d) { d.friction = -1; }), "jewelry_box.friction"},
       {"box table at 0", box_def([](JewelryBoxDef& d) { d.position.y() = 0; }), "jewelry_box.position"},
-      {"frame at 1e308", frame([](HandFrame& f) { f.joints[3].position.x() = 1e308; }), "hands[0].joints[3].position"},
-      {"frame radius 1e308", frame([](HandFrame& f) { f.joints[5].radius = 1e308; }), "hands[0].joints[5].radius"},
+      {"frame at 1e308", frame([](HandFrame& f) { f.joints[3].position.x() = 1e308; }), "hands[0].frame.joints[3].position"},
+      {"frame radius 1e308", frame([](HandFrame& f) { f.joints[5].radius = 1e308; }), "hands[0].frame.joints[5].radius"},
       {"dt below the clock resolution", [](World& w, const JewelryBox&) { w.step(1e-20); }, "dt"},
       {"lid_pinch_palm(nan)",
        [](World& w, const JewelryBox& box) { box.lid_pinch_palm(w, Handedness::Right, NAN); }, "angle"},
@@ -206,9 +206,9 @@ TEST(Bounds, ValuesAtTheEdgesOfTheirRangesStayFinite) {
   h.axis_parent = h.axis_child = Vec3(1e308, 0, 0);
   h.pivot_parent = Vec3(0, 0.5, 0);
   const JointId long_axis = world.add_joint(h);
-  world.add_hand(HandDef{});
+  const HandId hand = world.add_hand(HandDef{});
   for (int i = 0; i < 240; ++i) {
-    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, 0))});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, 0))}});
     ASSERT_TRUE(finite_world(world)) << "frame " << i;
     ASSERT_LE(world.joint_state(box.hinge).violation, 1e-9 * 2e6) << "frame " << i;
     ASSERT_LE(world.joint_state(long_axis).violation, 1e-9 * 2e6) << "frame " << i;
