@@ -28,12 +28,13 @@ Outcome run_scenario(const WorldDef& def = {}) {
   Outcome out;
   World world(def);
   JewelryBox box = build_jewelry_box(world);
-  world.add_hand(HandDef{});
-  HandDef left;
-  left.handedness = Handedness::Left;
-  world.add_hand(left);
+  const HandId right = world.add_hand(HandDef{});
+  HandDef left_def;
+  left_def.handedness = Handedness::Left;
+  const HandId left = world.add_hand(left_def);
   for (int i = 0; i < kScenarioFrames; ++i) {
-    world.step(1.0 / 60.0, scenario_frames(box, world, i));
+    const std::vector<HandFrame> f = scenario_frames(box, world, i);  // right, left
+    world.step(1.0 / 60.0, {{right, f[0]}, {left, f[1]}});
     out.max_angle = std::max(out.max_angle, world.joint_state(box.hinge).value);
     for (const Event& e : world.events()) out.grasps += e.type == EventType::GraspBegin;
   }
