@@ -111,11 +111,11 @@ TEST_P(JointsWorldHand, HingeDraggedPastAStopNearPiStaysAtTheStop) {
     bd.lower = -stop;
     bd.upper = stop;
     const JewelryBox box = build_jewelry_box(world, bd);
-    world.add_hand(HandDef{});
+    const HandId hand = world.add_hand(HandDef{});
     double previous = 0, max_value = 0, max_jump = 0;
     for (int i = 0; i < 340; ++i) {
       const double angle = std::clamp((i - 20) / 300.0, 0.0, 1.0) * 200 * kDeg;  // 0 -> 200 deg in 5 s
-      world.step(kDt, {pinch(box, world, angle, i * kDt)});
+      world.step(kDt, {{hand, pinch(box, world, angle, i * kDt)}});
       const JointState s = world.joint_state(box.hinge);
       max_jump = std::max(max_jump, std::abs(s.value - previous));
       max_value = std::max(max_value, s.value);
@@ -221,7 +221,7 @@ TEST_P(JointsWorldHand, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHing
   for (int i = 0; i < 10000; ++i) {
     const double phase = std::max(0, i - 20) / 180.0;  // 3 s per half swing
     const double angle = M_PI * (1 - std::cos(M_PI * std::fmod(phase, 2.0))) / 2;
-    world.step(kDt, {pinch(box, world, angle, i * kDt)});
+    world.step(kDt, {{hand, pinch(box, world, angle, i * kDt)}});
     const JointState s = world.joint_state(box.hinge);
     grasped = grasped || world.body_grasp(box.lid).grasped;
     max_value = std::max(max_value, s.value);
@@ -238,10 +238,10 @@ TEST_P(JointsWorldHand, GraspedLidDraggedPastItsLimitStaysAtTheLimitAndOnTheHing
 TEST_P(JointsWorldHand, GraspedLidFollowsTheHandArcWithinLimits) {
   World world(test::with_rule(GetParam()));
   JewelryBox box = build_jewelry_box(world);
-  world.add_hand(HandDef{});
+  const HandId hand = world.add_hand(HandDef{});
   for (int i = 0; i < 80; ++i) {
     const double angle = std::clamp((i - 20) / 60.0, 0.0, 1.0) * 60 * kDeg;
-    world.step(kDt, {pinch(box, world, angle, i * kDt)});
+    world.step(kDt, {{hand, pinch(box, world, angle, i * kDt)}});
   }
   const JointState s = world.joint_state(box.hinge);
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
@@ -255,7 +255,7 @@ TEST(JointsWorld, LidPushedOpenByAFlatHandTurnsOnItsHinge) {
   JewelryBoxDef def;
   def.base_mass = 0;  // the hand touches only the lid's lip; a fixed base keeps the test about the lid
   JewelryBox box = build_jewelry_box(world, def);
-  world.add_hand(HandDef{});
+  const HandId hand = world.add_hand(HandDef{});
   // A flat hand, palm up, fingertips under the lip, rising 9 cm at a steady 9 cm/s: it pushes without
   // grasping.
   const Vec3 front = box.lid_front(world);
@@ -264,7 +264,7 @@ TEST(JointsWorld, LidPushedOpenByAFlatHandTurnsOnItsHinge) {
     const double rise = i * 0.0015;
     Pose palm{front + Vec3(0, -def.lid_half_thickness - 0.012 + rise, 0.11),
               Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitZ()))};
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm, HandPoseParams{})});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, palm, HandPoseParams{})}});
     const JointState s = world.joint_state(box.hinge);
     max_value = std::max(max_value, s.value);
     ASSERT_LE(s.violation, 1e-9);
@@ -519,11 +519,11 @@ TEST_P(JointsWorldHand, PaperPipelineOpensTheLidLikeTheLeanOne) {
     if (paper) wd.particle_contacts = WorldDef::ParticleContacts::BulletObjects;
     World world(wd);
     JewelryBox box = build_jewelry_box(world);
-    world.add_hand(HandDef{});
+    const HandId hand = world.add_hand(HandDef{});
     bool grasped = false;
     for (int i = 0; i < 80; ++i) {
       const double angle = std::clamp((i - 20) / 60.0, 0.0, 1.0) * 60 * kDeg;
-      world.step(kDt, {pinch(box, world, angle, i * kDt)});
+      world.step(kDt, {{hand, pinch(box, world, angle, i * kDt)}});
       grasped = grasped || world.body_grasp(box.lid).grasped;
       EXPECT_LE(world.joint_state(box.hinge).violation, 1e-9);
     }
