@@ -130,7 +130,7 @@ TEST_P(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
   const HandId right = world.add_hand(HandDef{});
   HandDef left_def;
   left_def.handedness = Handedness::Left;
-  world.add_hand(left_def);
+  const HandId left_hand = world.add_hand(left_def);
   const HandFrame left = scenario_frames(box, world, 0)[1];
   const Vec3 base0 = world.body_pose(box.base).position;
   const Vec3 front(0, 0, box.def.base_half_extents.z() + 0.5 * box.def.lid_overhang);  // lid frame
@@ -147,7 +147,7 @@ TEST_P(soak, JewelryBoxOpenedAndClosedForeverDoesNotDrift) {
     palm.position += world.body_pose(box.base).orientation * Vec3(c.shift, 0, 0);
     const HandPoseParams shape =
         c.let_go > 0 ? open_grip(lid_pinch_shape(), c.let_go) : closing_grip(lid_pinch_shape(), c.closing_s);
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm, shape), left});
+    world.step(kDt, {{right, make_hand_frame(Handedness::Right, palm, shape)}, {left_hand, left}});
 
     for (BodyId b : world.bodies()) {
       ASSERT_TRUE(finite(world.body_pose(b))) << "frame " << i;
