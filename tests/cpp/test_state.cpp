@@ -29,13 +29,14 @@ struct Scene {
   World world;
   JewelryBox box;
   std::vector<BodyId> free;
+  HandId right_hand, left_hand;
 
   Scene() {
     box = build_jewelry_box(world);
-    world.add_hand(HandDef{});
+    right_hand = world.add_hand(HandDef{});
     HandDef left;
     left.handedness = Handedness::Left;
-    world.add_hand(left);
+    left_hand = world.add_hand(left);
     const Vec3 top = box.def.position;
     auto add = [&](const ShapeDef& shape, const Vec3& at, const Vec3& velocity) {
       BodyDef d;
@@ -50,7 +51,10 @@ struct Scene {
     add(ShapeDef::sphere(0.03), top + Vec3(0.35, 0.03, 0.05), Vec3(-0.4, 0, 0));
     add(ShapeDef::box(Vec3(0.04, 0.02, 0.03)), top + Vec3(-0.3, 0.3, 0.1), Vec3(0.3, 0, -0.1));
   }
-  void step(int frame) { world.step(1.0 / 60.0, scenario_frames(box, world, frame)); }
+  void step(int frame) {
+    const std::vector<HandFrame> f = scenario_frames(box, world, frame);  // right, left
+    world.step(1.0 / 60.0, {{right_hand, f[0]}, {left_hand, f[1]}});
+  }
 };
 
 constexpr int kFrames = 1000;
@@ -325,11 +329,11 @@ TEST(State, SqueezeHistoryIsSavedAndRestored) {
     WorldDef def;
     def.grasp.squeeze_distance = squeeze;
     auto w = std::make_unique<World>(def);
-    w->add_hand(HandDef{});
+    const HandId hand = w->add_hand(HandDef{});
     for (int i = 0; i < 10; ++i) {
       HandPoseParams p;
       p.curl = {0, i < 5 ? first_curl : 0.5, 0, 0, 0};
-      w->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
+      w->step(1.0 / 60, {{hand, make_hand_frame(Handedness::Right, Pose{}, p)}});
     }
     return w;
   };
@@ -339,7 +343,7 @@ TEST(State, SqueezeHistoryIsSavedAndRestored) {
   EXPECT_EQ(a->state_hash(), b->state_hash());
   HandPoseParams p;
   p.curl = {0, 0.6, 0, 0, 0};
-  a->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
-  b->step(1.0 / 60, {make_hand_frame(Handedness::Right, Pose{}, p)});
+  a->step(1.0 / 60, {{a->hands().front(), make_hand_frame(Handedness::Right, Pose{}, p)}});  // each world's one hand
+  b->step(1.0 / 60, {{b->hands().front(), make_hand_frame(Handedness::Right, Pose{}, p)}});
   EXPECT_EQ(a->state_hash(), b->state_hash());
 }
