@@ -122,6 +122,7 @@ void expect_pose_near(const Pose& a, const Pose& b, double tol, const std::strin
 struct Scene {
   World world;
   HandId hand;
+  HandId second;  // a second hand a test adds, driven by step's second frame
   BodyId box;
   Pinch pinch;
   Pose rest;
@@ -150,8 +151,12 @@ struct Scene {
     def.ground = false;
     return def;
   }
+  // frames[0] drives `hand`, frames[1] (if any) `second`; no frame: untracked.
   void step(const std::vector<HandFrame>& frames) {
-    world.step(dt, frames);
+    std::vector<HandInput> inputs;
+    if (frames.size() > 0) inputs.push_back({hand, frames[0]});
+    if (frames.size() > 1) inputs.push_back({second, frames[1]});
+    world.step(dt, inputs);
     for (const Event& e : world.events()) log.push_back(e);
   }
   // Comes down from 10 cm above with the thumb open.
@@ -348,7 +353,7 @@ TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
   for (int i = 0; i < 72; ++i) {
     const Pose palm{Vec3(-0.09 + speed * i * kDt, kHalf, 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
     const Pose before = world.body_pose(box);  // what this frame's contact pass sees
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm)});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, palm)}});
     grasps += count(world.events(), EventType::GraspBegin);
     touching += world.body_contact_count(box, hand) > 0;
     const Eigen::Matrix3Xd& tracked = world.hand_particles(hand, false);
@@ -400,7 +405,7 @@ int grasps_pressing_down(double turn, double depth, bool across_parts) {
   int grasps = 0;
   for (int i = 0; i <= 50; ++i) {
     const double y = 2 * kHalf - depth * std::min(1.0, i / 20.0) - lowest + 0.01 * std::max(0.0, 1 - i / 10.0);
-    world.step(kDt, {make_hand_frame(Handedness::Right, Pose{Vec3(-palm.x(), y, -palm.z()), q})});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, Pose{Vec3(-palm.x(), y, -palm.z()), q})}});
     grasps += count(world.events(), EventType::GraspBegin);
   }
   return grasps;
@@ -461,7 +466,7 @@ Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true, 
     const double x = half + gap + skin;
     const HandFrame r = make_hand_frame(Handedness::Right, Pose{Vec3(x, y, 0) - palm, faces_minus_x});
     const HandFrame l = make_hand_frame(Handedness::Left, Pose{Vec3(-x, y, 0) - left_palm, faces_plus_x});
-    return two_hands ? std::vector<HandFrame>{r, l} : std::vector<HandFrame>{r};
+    return two_hands ? std::vector<HandInput>{{right, r}, {left, l}} : std::vector<HandInput>{{right, r}};
   };
   auto step = [&](double gap, double y) {
     world.step(kDt, frames(gap, y));
@@ -531,6 +536,7 @@ TEST(Step, DitheringAtFirstTouchDoesNotFlicker) {
 TEST(Step, SecondHandSlipsThenTakesOverWithoutAJump) {
   Scene s;
   const HandId left = s.world.add_hand(HandDef{Handedness::Left});
+  s.second = left;
   const Pinch lp = make_pinch(s.world.hand_model(left));
   s.grasp();
   const Pose lifted = s.lift(0.2, 30);
@@ -649,12 +655,12 @@ TEST(Step, ContactEventsNameTheRightHandAndBody) {
   std::vector<Event> log;
   for (int i = 0; i < 40; ++i) {
     const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);  // the tip joint down to 1 cm above, back up
-    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), y), press(Handedness::Left, Vec3(-0.5, 0, 0), 0.3)});
+    world.step(kDt, {{right, press(Handedness::Right, Vec3(0.4, 0, 0), y)}, {left, press(Handedness::Left, Vec3(-0.5, 0, 0), 0.3)}});
     for (const Event& e : world.events()) log.push_back(e);
   }
   for (int i = 0; i < 40; ++i) {
     const double y = 0.06 - 0.0025 * (i < 20 ? i : 40 - i);
-    world.step(kDt, {press(Handedness::Right, Vec3(0.4, 0, 0), 0.3), press(Handedness::Left, Vec3(0, 0, 0), y)});
+    world.step(kDt, {{right, press(Handedness::Right, Vec3(0.4, 0, 0), 0.3)}, {left, press(Handedness::Left, Vec3(0, 0, 0), y)}});
     for (const Event& e : world.events()) log.push_back(e);
   }
   ASSERT_EQ(log.size(), 4u);
@@ -674,33 +680,32 @@ TEST(Step, BadInputIsRejectedAndLeavesTheWorldUnchanged) {
   auto edited = [&](auto edit) {
     HandFrame f = good;
     edit(f);
-    return std::vector<HandFrame>{f};
+    return std::vector<HandInput>{{s.hand, f}};
   };
   struct Case {
     const char* name;
-    std::vector<HandFrame> frames;
+    std::vector<HandInput> hands;
     double dt;
     const char* argument;
   };
   const double nan = std::nan("");
   const std::vector<Case> cases = {
-      {"more frames than hands", {good, good}, kDt, "hands"},
       {"NaN in a valid joint", edited([&](HandFrame& f) { f.joints[7].position.y() = nan; }), kDt,
-       "hands[0].joints[7].position"},
+       "hands[0].frame.joints[7].position"},
       {"non-unit quaternion", edited([](HandFrame& f) { f.joints[3].orientation = Quat(0.7, 0, 0, 0); }), kDt,
-       "hands[0].joints[3].orientation"},
+       "hands[0].frame.joints[3].orientation"},
       {"wrong handedness", edited([](HandFrame& f) { f.handedness = Handedness::Left; }), kDt,
-       "hands[0].handedness"},
-      {"dt zero", {good}, 0.0, "dt"},
-      {"dt negative", {good}, -kDt, "dt"},
-      {"dt NaN", {good}, nan, "dt"},
+       "hands[0].frame.handedness"},
+      {"dt zero", {{s.hand, good}}, 0.0, "dt"},
+      {"dt negative", {{s.hand, good}}, -kDt, "dt"},
+      {"dt NaN", {{s.hand, good}}, nan, "dt"},
   };
   const uint64_t hash = s.world.state_hash();
   const Pose palm = s.world.hand_palm_pose(s.hand);
   const size_t events = s.world.events().size();
   for (const Case& c : cases) {
     try {
-      s.world.step(c.dt, c.frames);
+      s.world.step(c.dt, c.hands);
       ADD_FAILURE() << c.name << ": accepted";
     } catch (const Error& e) {
       EXPECT_EQ(e.status(), Status::InvalidArgument) << c.name;
@@ -735,14 +740,14 @@ TEST(Step, RemovingAHeldBodyEndsItsGraspAndContacts) {
     for (const Event& e : ev) EXPECT_TRUE(e.hand == s.hand && e.body == old);
   };
   check(s.world.events());
-  s.world.step(kDt, {hold});
+  s.world.step(kDt, {{s.hand, hold}});
   check(s.world.events());  // listed once more, for a caller that reads events after each step
-  s.world.step(kDt, {hold});
+  s.world.step(kDt, {{s.hand, hold}});
   EXPECT_TRUE(s.world.events().empty());
   // A new body in the same slot is a stranger to the hand.
   const BodyId next = s.world.add_body(cube(Vec3(0.5, kHalf, 0)));
   EXPECT_EQ(next.index, old.index);
-  for (int i = 0; i < 10; ++i) s.world.step(kDt, {hold});
+  for (int i = 0; i < 10; ++i) s.world.step(kDt, {{s.hand, hold}});
   EXPECT_TRUE(s.world.events().empty());
   EXPECT_FALSE(s.world.body_grasp(next).grasped);
   EXPECT_EQ(s.world.body_motion(next), BodyMotion::Dynamic);
@@ -1031,6 +1036,17 @@ TEST(Step, AFrameDrivesTheHandItNamesAfterASlotIsReused) {
   world.step(kDt, std::vector<HandFrame>{make_hand_frame(Handedness::Right, there)});
   EXPECT_TRUE(world.hand_tracked(c));
   EXPECT_FALSE(world.hand_tracked(b));
+  // More frames than hands: refused naming `hands`, nothing changes.
+  const uint64_t hash = world.state_hash();
+  try {
+    const HandFrame f = make_hand_frame(Handedness::Right, there);
+    world.step(kDt, std::vector<HandFrame>{f, f, f});
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.status(), Status::InvalidArgument);
+    EXPECT_EQ(e.argument(), "hands") << e.what();
+  }
+  EXPECT_EQ(world.state_hash(), hash);
 }
 
 // A null, stale, unknown or repeated id, or a bad frame, is refused naming the entry; nothing changes.
