@@ -69,15 +69,15 @@ TEST(StepReport, AHugeDtDropsSubstepsAndSaysHowMuch) {
 
 TEST(StepReport, APalmJumpingFasterThanTheSpeedCapWarns) {
   World w;
-  w.add_hand(HandDef{});
+  const HandId hand = w.add_hand(HandDef{});
   const Pose here{Vec3(0, 0.3, 0), Quat::Identity()};
-  EXPECT_EQ(w.step(kDt, {make_hand_frame(Handedness::Right, here)}).warnings, 0u);
-  EXPECT_EQ(w.step(kDt, {make_hand_frame(Handedness::Right, here)}).warnings, 0u);
+  EXPECT_EQ(w.step(kDt, {{hand, make_hand_frame(Handedness::Right, here)}}).warnings, 0u);
+  EXPECT_EQ(w.step(kDt, {{hand, make_hand_frame(Handedness::Right, here)}}).warnings, 0u);
   const Pose far{Vec3(1e6, 0.3, 0), Quat::Identity()};  // 6e7 m/s, beyond the 1e4 m/s cap
-  const StepReport jump = w.step(kDt, {make_hand_frame(Handedness::Right, far)});
+  const StepReport jump = w.step(kDt, {{hand, make_hand_frame(Handedness::Right, far)}});
   EXPECT_TRUE(jump.has(StepWarning::HandTeleported));
   EXPECT_EQ(jump.stage(Stage::Skinning).work, 1);
-  EXPECT_FALSE(w.step(kDt, {make_hand_frame(Handedness::Right, far)}).has(StepWarning::HandTeleported));
+  EXPECT_FALSE(w.step(kDt, {{hand, make_hand_frame(Handedness::Right, far)}}).has(StepWarning::HandTeleported));
 }
 
 // JointState's solve fields describe this step's solve only: the frame after the hand leaves they are cleared.
@@ -87,8 +87,8 @@ TEST(StepReport, JointSolvedIsClearedTheFrameAfterTheHandLeaves) {
   const HandId hand = world.add_hand(HandDef{});
   for (int i = 0; i < 50; ++i) {  // the hand closes its pinch on the lip (closing_grip: 15 frames), then swings
     const double angle = std::clamp((i - 20) / 30.0, 0.0, 1.0) * 0.5;
-    world.step(kDt, {make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
-                                     closing_grip(lid_pinch_shape(), i * kDt))});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle),
+                                             closing_grip(lid_pinch_shape(), i * kDt))}});
   }
   ASSERT_TRUE(world.body_grasp(box.lid).grasped);
   const JointState held = world.joint_state(box.hinge);
