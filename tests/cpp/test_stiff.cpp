@@ -28,6 +28,7 @@ struct Scene {
   World world;
   JewelryBox box;
   HandId hand;
+  HandId second;  // a second hand a test adds, driven by step's second frame
   double size = 1.0;  // scene scale, for the violation bound
   double max_violation = 0;
   double time = 0;  // s since the hand arrived at the lip: its pinch closes (closing_grip) over kGripClosingS
@@ -43,8 +44,12 @@ struct Scene {
     return make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), time));
   }
 
+  // frames[0] drives `hand`, frames[1] (if any) `second`; no frame: untracked.
   void step(double dt, const std::vector<HandFrame>& frames) {
-    world.step(dt, frames);
+    std::vector<HandInput> inputs;
+    if (frames.size() > 0) inputs.push_back({hand, frames[0]});
+    if (frames.size() > 1) inputs.push_back({second, frames[1]});
+    world.step(dt, inputs);
     time += dt;
     check();
   }
@@ -125,7 +130,7 @@ TEST_P(stiff, BadFramesAndTimeStepsAreRejectedAndChangeNothing) {
   const uint64_t hash = s.world.state_hash();
   auto rejected = [&](double dt, HandFrame f, const std::string& argument) {
     try {
-      s.world.step(dt, {f});
+      s.world.step(dt, {{s.hand, f}});
       ADD_FAILURE() << "accepted: " << argument;
     } catch (const Error& e) {
       EXPECT_EQ(e.argument().rfind(argument, 0), 0u) << e.what();
@@ -134,16 +139,16 @@ TEST_P(stiff, BadFramesAndTimeStepsAreRejectedAndChangeNothing) {
   };
   HandFrame f = s.pinch(0);
   f.joints[kIndexTip].position.x() = NAN;
-  rejected(kDt, f, "hands[0].joints[10].position");
+  rejected(kDt, f, "hands[0].frame.joints[10].position");
   f = s.pinch(0);
   f.joints[kIndexTip].position.y() = INFINITY;
-  rejected(kDt, f, "hands[0].joints[10].position");
+  rejected(kDt, f, "hands[0].frame.joints[10].position");
   f = s.pinch(0);
   f.joints[kWrist].orientation = Quat(0, 0, 0, 0);
-  rejected(kDt, f, "hands[0].joints[1].orientation");
+  rejected(kDt, f, "hands[0].frame.joints[1].orientation");
   f = s.pinch(0);
   f.joints[kWrist].orientation = Quat(2, 0, 0, 0);
-  rejected(kDt, f, "hands[0].joints[1].orientation");
+  rejected(kDt, f, "hands[0].frame.joints[1].orientation");
   for (double dt : {0.0, -kDt, double(NAN), double(INFINITY)}) rejected(dt, s.pinch(0), "dt");
   // Slightly non-unit quaternions are normalized, not rejected.
   f = s.pinch(0);
@@ -294,11 +299,11 @@ TEST_P(stiff, TenThousandParticles) {
   JewelryBox box = build_jewelry_box(world);
   HandDef hd;
   hd.particle_count = 10000;
-  world.add_hand(hd);
-  EXPECT_EQ(world.hand_model(world.hands()[0]).particle_count(), 10000);
+  const HandId hand = world.add_hand(hd);
+  EXPECT_EQ(world.hand_model(hand).particle_count(), 10000);
   for (int i = 0; i < 70; ++i) {
     const Pose palm = box.lid_pinch_palm(world, Handedness::Right, 45 * kDeg * std::clamp((i - 20) / 40.0, 0.0, 1.0));
-    world.step(kDt, {make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), i * kDt))});
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), i * kDt))}});
     ASSERT_LE(world.joint_state(box.hinge).violation, 1e-9);
   }
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
@@ -523,6 +528,7 @@ struct TwoHands {
     HandDef l;
     l.handedness = Handedness::Left;
     left = s.world.add_hand(l);
+    s.second = left;
     if (!hinged) s.world.remove_joint(s.box.hinge);
   }
   // The hands' palms: the lid pinch at `angle`, lifted by `lift`, each moved `apart` outwards along the lip.
