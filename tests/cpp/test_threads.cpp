@@ -42,6 +42,11 @@ void attempt(F&& call, std::atomic<int>& errors, std::atomic<int>& bad) {
   }
 }
 
+// scenario_frames' right and left frame, to their hands.
+std::vector<HandInput> both_hands(HandId right, HandId left, const std::vector<HandFrame>& f) {
+  return {{right, f[0]}, {left, f[1]}};
+}
+
 }  // namespace
 
 // Two threads step one world with hand frames, one adds and removes bodies (and teleports them), one reads
@@ -49,8 +54,8 @@ void attempt(F&& call, std::atomic<int>& errors, std::atomic<int>& bad) {
 TEST(Threads, ManyThreadsHammerOneWorld) {
   World world;
   const JewelryBox box = build_jewelry_box(world);
-  world.add_hand(small_hand(Handedness::Right));
-  world.add_hand(small_hand(Handedness::Left));
+  const HandId right = world.add_hand(small_hand(Handedness::Right));
+  const HandId left = world.add_hand(small_hand(Handedness::Left));
   const long n = rounds();
   std::atomic<int> errors{0}, bad{0}, nonfinite{0};
   std::atomic<long> frame{0};
@@ -59,7 +64,7 @@ TEST(Threads, ManyThreadsHammerOneWorld) {
   auto stepper = [&] {
     for (long i = 0; i < n; ++i) {
       const int f = int(frame.fetch_add(1) % 600);
-      attempt([&] { world.step(1.0 / 60, scenario_frames(box, world, f)); }, errors, bad);
+      attempt([&] { world.step(1.0 / 60, both_hands(right, left, scenario_frames(box, world, f))); }, errors, bad);
     }
   };
   auto editor = [&] {
@@ -122,9 +127,9 @@ TEST(Threads, SeveralWorldsStepInParallel) {
   auto run = [frames](uint64_t* hash) {
     World world;
     const JewelryBox box = build_jewelry_box(world);
-    world.add_hand(small_hand(Handedness::Right));
-    world.add_hand(small_hand(Handedness::Left));
-    for (int f = 0; f < frames; ++f) world.step(1.0 / 60, scenario_frames(box, world, f));
+    const HandId right = world.add_hand(small_hand(Handedness::Right));
+    const HandId left = world.add_hand(small_hand(Handedness::Left));
+    for (int f = 0; f < frames; ++f) world.step(1.0 / 60, both_hands(right, left, scenario_frames(box, world, f)));
     *hash = world.state_hash();
   };
   uint64_t alone = 0;
