@@ -249,7 +249,7 @@ TEST(LeanPipeline, FarHandSkipsParticleSkinningAndReadsStayExact) {
   w.add_body(box);
   const HandId hand = w.add_hand(HandDef{});
   const HandFrame far = flat_hand_at(Vec3(2, 1.5, 2));
-  const StepReport report = w.step(1.0 / 60, {far});
+  const StepReport report = w.step(1.0 / 60, {{hand, far}});
   EXPECT_EQ(report.stage(Stage::Skinning).work, 1);      // one tracked hand ...
   EXPECT_EQ(report.stage(Stage::Skinning).particles, 0);  // ... far: no particle skinned
   EXPECT_EQ(report.stage(Stage::Contacts).skip, SkipReason::NoHandNearBody);
@@ -272,10 +272,10 @@ TEST(LeanPipeline, ContactPrefilterFindsEveryContact) {
   box.pose.position = Vec3(0, -0.1, -0.05);
   const BodyId body = w.add_body(box);
   const HandId hand = w.add_hand(HandDef{});
-  w.step(1.0 / 60, {flat_hand_at(Vec3(0, 0.3, 0))});
+  w.step(1.0 / 60, {{hand, flat_hand_at(Vec3(0, 0.3, 0))}});
   const double lowest = w.hand_particles(hand, false).row(1).minCoeff() - 0.3;
   const HandFrame press = flat_hand_at(Vec3(0, -lowest - 0.01, 0));
-  w.step(1.0 / 60, {press});
+  w.step(1.0 / 60, {{hand, press}});
   const HandModel& m = w.hand_model(hand);
   HandState s;
   pose_hand(m, press, s);
@@ -300,7 +300,7 @@ TEST(LeanPipeline, ThreadedRenderSkinningIsBitIdentical) {
     box.pose.position = Vec3(0, -0.1, -0.05);
     w.add_body(box);
     const HandId hand = w.add_hand(HandDef{});
-    w.step(1.0 / 60, {flat_hand_at(Vec3(0, 0.02, 0))});  // pressing: the render deformation runs too
+    w.step(1.0 / 60, {{hand, flat_hand_at(Vec3(0, 0.02, 0))}});  // pressing: the render deformation runs too
     out[threads - 1] = w.hand_render_vertices(hand);
   }
   ASSERT_EQ(out[0].cols(), out[1].cols());
