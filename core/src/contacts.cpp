@@ -361,12 +361,131 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
   }
 }
 
+// --- the hold path (docs/grasp.md "The hold path") ---
+//
+// A held body needs its contacts for one decision each frame: whether the hand still holds it (eq. 3 with
+// release_distance: one opposing pair). While the hand is still on it -- every particle within kHoldStill of
+// where it was, in the body's frame, at the last full pass (the anchor) -- the witness pair that proved the grasp
+// is skinned and collided alone, and if it still opposes that is the answer the full pass would give
+// (hand_intent tries the witness first). The other particles are where they were at the anchor, so their entry
+// faces are carried over from it; their contacts and the deformation are made from the step's own numbers
+// (complete_contacts) only when something reads them. A witness that lets go takes the full pass in the same
+// step.
+
+namespace {
+
+// How far, at most, a particle may have moved relative to the held body since the anchor for the hold path to
+// run. 1 micrometre: far below what a hand tracker resolves (joint jitter is of the order of a millimetre,
+// docs/grasp.md "Release"), so a hand this close to where it was holds the body as it did, and far above the
+// rounding of a body's pose carried by its hand (1e-12 m at 10 km from the origin), so a hand that carries a
+// body without moving on it stays on the hold path.
+constexpr double kHoldStill = 1e-6;
+
+// A bone's transform (bind to world) as bind to the frame of a body whose world-to-body rotation is Rt.
+BoneTransform in_body(const Mat3& Rt, const Vec3& origin, const BoneTransform& bone) {
+  BoneTransform m;
+  m.leftCols<3>() = Rt * bone.leftCols<3>();
+  m.col(3) = Rt * (bone.col(3) - origin);
+  return m;
+}
+
+}  // namespace
+
+// Whether the pair is held by its hand, with a witness and an anchor, and no particle has moved more than
+// kHoldStill relative to the body since the anchor: per bone, a point p blended from it moved by
+// dR (p - j) + (dR j + dt), at most |dR| reach + |dR j + dt| (reach: its particles' farthest from its joint j).
+bool World::Impl::holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const {
+  const uint32_t hand = uint32_t(&h - hands.data());
+  if (pair.anchor.size() != kHandJointCount || !pair.tracker.grasped() || !b.held_by(hand) || pair.witness[0] < 0 ||
+      pair.witness[0] == pair.witness[1])
+    return false;
+  const Mat3 Rt = b.pose.orientation.normalized().toRotationMatrix().transpose();
+  const Mat3 At = pair.anchor_pose.orientation.normalized().toRotationMatrix().transpose();
+  for (int k = 0; k < kHandJointCount; ++k) {
+    if (h.reach.reach[k] < 0) continue;  // moves no particle
+    const BoneTransform now = in_body(Rt, b.pose.position, h.state.bones[k]);
+    const BoneTransform then = in_body(At, pair.anchor_pose.position, pair.anchor[k]);
+    const Mat3 dR = now.leftCols<3>() - then.leftCols<3>();
+    const Vec3 dj = dR * h.reach.bind_joint[k] + (now.col(3) - then.col(3));
+    if (!(dR.norm() * h.reach.reach[k] + dj.norm() <= kHoldStill)) return false;
+  }
+  return true;
+}
+
+// The witness pass of a still pair: its two particles (skinned alone in pose_hands) against the body, as the full
+// pass would collide them. True when both touch and still oppose: the pair's contacts are then the two, its
+// entry faces the anchor's with the witnesses' renewed, and the rest is made when read (lazy).
+bool World::Impl::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair, double dt) {
+  const HandSlot& h = hands[hi];
+  const Body& b = bodies[bi];
+  const double radius = h.model->particle_radius, margin = def.grasp.release_distance;
+  const int first = std::min(pair.witness[0], pair.witness[1]), second = std::max(pair.witness[0], pair.witness[1]);
+  std::vector<std::pair<int, int>>& ranges = scratch_ranges;
+  ranges.assign({{first, first + 1}, {second, second + 1}});
+  std::vector<ParticleContact>& found = scratch_complete;
+  found.clear();
+  collide_particle_ranges(h.state.tracked_positions, ranges, radius + margin, b.prepared, b.pose, found);
+  if (found.size() != 2) return false;
+  for (ParticleContact& c : found) c.depth -= margin;
+  keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt,
+                   pair.previous_faces, scratch_faces, found);
+  if (!(found[0].normal.dot(found[1].normal) < def.grasp.cos_threshold)) return false;  // as witness_opposes
+  pair.entry_faces = pair.previous_faces;
+  auto by_particle = [](const EntryFace& f, int p) { return f.particle < p; };
+  for (const EntryFace& f : scratch_faces) {
+    auto it = std::lower_bound(pair.entry_faces.begin(), pair.entry_faces.end(), f.particle, by_particle);
+    if (it == pair.entry_faces.end() || it->particle != f.particle) return false;  // not touching at the anchor
+    *it = f;
+  }
+  pair.contacts.swap(found);
+  pair.lazy = true;
+  pair.contact_pose = b.pose;
+  pair.contact_velocity = {b.linear, b.angular};
+  pair.contact_dt = dt;
+  return true;
+}
+
+// The full contacts of the hand's lazy pairs, as the full pass of their step would have made them (its bones,
+// history, previous faces, and the body's pose and velocity then), and the hand's deformation from them.
+// Changes no state: the entry faces stay the carried ones, so reading does not change the future.
+void World::Impl::complete_contacts(uint32_t hi) {
+  bool any = false;
+  HandSlot& h = hands[hi];
+  for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it) {
+    HandBodyPair& pair = it->second;
+    if (!pair.lazy) continue;
+    const Body& b = bodies[it->first.second];
+    refresh_particles(h, false);  // every particle, with the same bits as the groups in reach
+    const double radius = h.model->particle_radius, margin = def.grasp.release_distance;
+    Vec3 lo, hi_b;
+    local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, pair.contact_pose, lo, hi_b);
+    near_particle_ranges(h, radius + margin, lo, hi_b, scratch_ranges);
+    std::vector<ParticleContact>& found = scratch_complete;
+    found.clear();
+    collide_particle_ranges(h.state.tracked_positions, scratch_ranges, radius + margin, b.prepared, pair.contact_pose,
+                            found);
+    for (ParticleContact& c : found) c.depth -= margin;
+    keep_entry_faces(h.state.tracked_positions, radius, b.prepared, pair.contact_pose, pair.contact_velocity, h.history,
+                     pair.contact_dt, pair.previous_faces, scratch_faces, found);
+    pair.contacts.swap(found);
+    pair.lazy = false;
+    any = true;
+  }
+  if (any) deform_hand(hi);
+}
+
+void World::Impl::complete_all_contacts() {
+  for (uint32_t hi = 0; hi < hands.size(); ++hi)
+    if (hands[hi].alive) complete_contacts(hi);
+}
+
 // --- line 3: detect hand collision and contact particles ---
 StageReport World::Impl::detect_contacts(double dt) {
   for (auto& entry : pairs) {
     entry.second.contacts.clear();
     entry.second.previous_faces.swap(entry.second.entry_faces);
     entry.second.entry_faces.clear();
+    entry.second.lazy = false;
   }
   std::vector<ParticleContact>& found = scratch_contacts;  // swapped into the pairs: buffers are reused
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
@@ -376,6 +495,20 @@ StageReport World::Impl::detect_contacts(double dt) {
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
     HandSlot& h = hands[hi];
     if (!h.alive || !h.state.tracked) continue;
+    // The hold path first; a still pair whose witness let go is skinned in reach (as pose_hands would have) and
+    // takes the full pass below.
+    bool reskin = false;
+    for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it) {
+      if (!it->second.still) continue;
+      if (hold_by_witness(hi, it->first.second, it->second, dt)) {
+        ++tested;
+        candidates += 2;
+      } else {
+        it->second.still = false;
+        reskin = true;
+      }
+    }
+    if (reskin) skin_particles_in_reach(h);
     // A hand far from every body (pose_hands) has no group within reach and cannot touch anything.
     if (!bullet && !def.paper_pipeline && h.reach_groups_only && h.reach_groups.empty()) continue;
     const double radius = h.model->particle_radius;
@@ -393,7 +526,12 @@ StageReport World::Impl::detect_contacts(double dt) {
       Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
-      const double margin = b.held_by(hi) ? def.grasp.release_distance : 0.0;
+      const bool held = b.held_by(hi);
+      const double margin = held ? def.grasp.release_distance : 0.0;
+      if (held) {
+        auto lazy = pairs.find({hi, bi});
+        if (lazy != pairs.end() && lazy->second.lazy) continue;  // held still: the witness pass answered
+      }
       if (!def.paper_pipeline &&
           !bounds_overlap(h.state.bounds_lo - Vec3::Constant(margin), h.state.bounds_hi + Vec3::Constant(margin),
                           lo, hi_b))
@@ -424,6 +562,14 @@ StageReport World::Impl::detect_contacts(double dt) {
       keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
+      // A held pair's full pass is the anchor of the hold path's next steps.
+      // (A copy: the bones are taken into the body's frame only when holds_still compares them.)
+      if (held && hold_path && !bullet && !def.paper_pipeline) {
+        it->second.anchor.assign(h.state.bones.begin(), h.state.bones.end());
+        it->second.anchor_pose = b.pose;
+      } else {
+        it->second.anchor.clear();
+      }
     }
   }
   if (tested == 0) return stage_skipped(SkipReason::NoHandNearBody);

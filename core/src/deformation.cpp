@@ -165,35 +165,39 @@ void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
 
 // --- local deformation: penetrating particles move back to the surface (what the user sees) ---
 StageReport World::Impl::deform_hands() {
-  std::vector<ParticleContact>& all = scratch_contacts;
   int deformed = 0;
-  for (uint32_t hi = 0; hi < hands.size(); ++hi) {
-    HandSlot& h = hands[hi];
-    if (!h.alive || !h.state.tracked) continue;
-    all.clear();
-    for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it)
-      for (const ParticleContact& c : it->second.contacts)
-        if (c.depth > 0) all.push_back(c);
-    if (all.empty() && !def.paper_pipeline) {
-      h.state.displaced.clear();  // deformed == tracked; the copy is made only if someone reads it
-      h.deformed_current = false;
-      continue;
-    }
-    if (def.paper_pipeline) {
-      refresh_particles(h, false);
-      deform_particles(*h.model, h.state, all);
-      h.deformed_current = true;
-    } else {
-      // Only the touching particles: their deformed centres are kept aside and the full deformed matrix is
-      // made when read (refresh_particles), so 3 touching particles of 10,000 cost 3, not a 10,000 copy.
-      displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres,
-                         &scratch_inside);
-      h.deformed_current = false;
-    }
-    deformed += int(h.state.displaced.size());
-  }
+  for (uint32_t hi = 0; hi < hands.size(); ++hi)
+    if (hands[hi].alive && hands[hi].state.tracked) deformed += deform_hand(hi);
   if (deformed == 0) return stage_skipped(SkipReason::NoParticleInside);
   return stage_work(deformed, deformed);
+}
+
+// One hand's deformation from its contacts of the frame (with a lazy pair's witnesses only until
+// complete_contacts redoes it); returns how many particles it displaced.
+int World::Impl::deform_hand(uint32_t hi) {
+  HandSlot& h = hands[hi];
+  std::vector<ParticleContact>& all = scratch_contacts;
+  all.clear();
+  for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it)
+    for (const ParticleContact& c : it->second.contacts)
+      if (c.depth > 0) all.push_back(c);
+  if (all.empty() && !def.paper_pipeline) {
+    h.state.displaced.clear();  // deformed == tracked; the copy is made only if someone reads it
+    h.deformed_current = false;
+    return 0;
+  }
+  if (def.paper_pipeline) {
+    refresh_particles(h, false);
+    deform_particles(*h.model, h.state, all);
+    h.deformed_current = true;
+  } else {
+    // Only the touching particles: their deformed centres are kept aside and the full deformed matrix is
+    // made when read (refresh_particles), so 3 touching particles of 10,000 cost 3, not a 10,000 copy.
+    displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres,
+                       &scratch_inside);
+    h.deformed_current = false;
+  }
+  return int(h.state.displaced.size());
 }
 
 }  // namespace handsim

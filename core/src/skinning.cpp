@@ -216,6 +216,22 @@ void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHand
   }
 }
 
+HANDSIM_SIMD_CLONES
+void skin_layout_point(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, int i,
+                       double* out) {
+  // The group holding point i, cut down to it: the same loop body as skin_layout's, so the same bits.
+  SkinGroup g = *std::upper_bound(layout.groups.begin(), layout.groups.end(), i,
+                                  [](int p, const SkinGroup& group) { return p < group.end; });
+  g.begin = i;
+  g.end = i + 1;
+  switch (g.count) {
+    case 1: skin_group<1>(g, layout, bones, out, nullptr); break;
+    case 2: skin_group<2>(g, layout, bones, out, nullptr); break;
+    case 3: skin_group<3>(g, layout, bones, out, nullptr); break;
+    default: skin_group<4>(g, layout, bones, out, nullptr); break;
+  }
+}
+
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
                  Eigen::Matrix3Xd& out, std::vector<double>* bounds) {
   out.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
@@ -335,11 +351,13 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
 StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
   int tracked = 0, skinned = 0, in_reach = 0;
+  for (auto& entry : pairs) entry.second.still = false;  // set below for the hands near a body
   for (uint32_t i = 0; i < hands.size(); ++i) {
     HandSlot& h = hands[i];
     if (!h.alive) continue;
     const HandFrame* frame = frames[i];
     if (!frame || !frame->tracked()) {
+      complete_contacts(i);  // the last frame's lazy contacts and deformation stay readable while it is away
       h.state.tracked = false;
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
       h.grip.clear();     // nor have closed on what it finds there
@@ -358,7 +376,17 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
       skin_particles(h);
       ++skinned;
     } else if (near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+      // The hold path: a pair whose hand holds its body as it held it at the anchor skins only its witness
+      // pair (skin_particles_in_reach leaves the body out).
+      bool still = false;
+      for (auto it = pairs.lower_bound({i, 0}); it != pairs.end() && it->first.first == i; ++it) {
+        HandBodyPair& pair = it->second;
+        pair.still = hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
+                     holds_still(h, bodies[it->first.second], pair);
+        still = still || pair.still;
+      }
       in_reach += skin_particles_in_reach(h);
+      if (still) skin_witnesses(h);
       ++skinned;
     } else {
       h.reach_groups.clear();  // far from every body: no contact is possible this frame
@@ -401,6 +429,10 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
   bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
   const uint32_t hand = uint32_t(&h - hands.data());
   for (uint32_t bi : near_bodies) {
+    if (bodies[bi].held_by(hand)) {
+      auto it = pairs.find({hand, bi});
+      if (it != pairs.end() && it->second.still) continue;  // held still: its witness pair is skinned alone
+    }
     const double margin = bodies[bi].held_by(hand) ? def.grasp.release_distance : 0.0;
     for (int k = 0; k < 6; ++k) near_boxes.push_back(body_boxes[6 * bi + k] + (k < 3 ? -margin : margin));
   }
@@ -459,6 +491,17 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
   return count;
 }
 
+// The witness pairs of the hand's still pairs (hold path): eq. 1 for those particles alone. Their groups keep the
+// boxes skin_particles_in_reach gave them (empty unless in reach of another body), so no other body's contact
+// test sees them unless it would have.
+void World::Impl::skin_witnesses(HandSlot& h) {
+  const uint32_t hand = uint32_t(&h - hands.data());
+  for (auto it = pairs.lower_bound({hand, 0}); it != pairs.end() && it->first.first == hand; ++it)
+    if (it->second.still)
+      for (int p : it->second.witness)
+        skin_layout_point(h.model->particle_skin, h.state.bones, p, h.state.tracked_positions.data());
+}
+
 // Eq. 1 for the particles, with the box of each particle group for the contact prefilter; the hand's bounds
 // become the exact box of its particle spheres.
 void World::Impl::skin_particles(HandSlot& h) {
@@ -478,6 +521,7 @@ void World::Impl::skin_particles(HandSlot& h) {
 // Brings the lazily skipped particle positions up to date (same arithmetic as in the step, so same bits).
 void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
   if (!h.particles_current) skin_particles(h);
+  if (deformed) complete_contacts(uint32_t(&h - hands.data()));  // a held body's lazy contacts deform it too
   if (deformed && !h.deformed_current) {
     h.state.deformed_positions = h.state.tracked_positions;
     for (size_t k = 0; k < h.state.displaced.size(); ++k)  // the particles deform_hands pushed back
@@ -493,6 +537,7 @@ bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
 }
 
 void World::Impl::skin_render_mesh(HandSlot& h) {
+  complete_contacts(uint32_t(&h - hands.data()));  // the deformation reads every contact of the frame
   if (!h.state.displaced.empty()) refresh_particles(h, true);  // the deformation reads the displaced particles
   skin_groups(*h.model, h.state.bones, h.render, def.render_threads);
   apply_render_deformation(*h.model, h.state, h.render);  // reads only displaced particles, which are current

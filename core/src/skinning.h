@@ -31,6 +31,10 @@ SkinLayout build_particle_layout(const SkinLayout& render, const std::vector<int
 // per group: min x y z, max x y z), each group's box of skinned points is written too (the contact prefilter).
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, double* out,
                  size_t first, size_t last, double* bounds = nullptr);
+// Point i of the layout alone, into out[3i..3i+2] (out: as skin_layout's), with skin_layout's arithmetic: the
+// same bits.
+void skin_layout_point(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones, int i,
+                       double* out);
 void skin_layout(const SkinLayout& layout, const std::array<BoneTransform, kHandJointCount>& bones,
                  Eigen::Matrix3Xd& out, std::vector<double>* bounds = nullptr);
 

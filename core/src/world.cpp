@@ -170,6 +170,7 @@ void World::remove_body(BodyId id) {
   for (const Joint& j : w.joints)
     if (j.alive && (j.child == id.index || j.parent == id.index))
       validate::fail("body", "a joint still uses it; remove the joint first", Status::InvalidState);
+  w.complete_all_contacts();  // the hands' deformation of the last step, with this body's contacts, stays readable
   // Let go of it first, so the hands' grasp state and the events stay consistent: every hand holding it
   // gets a GraspEnd, every hand touching it a ContactEnd, and no pair keeps the slot index it leaves behind.
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
@@ -228,6 +229,7 @@ int World::body_contact_count(BodyId body, HandId hand) const {
   const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
+  impl_->complete_contacts(hand.index);  // a held body's contacts beyond its witness pair are made when read
   auto it = impl_->pairs.find({hand.index, body.index});
   return it == impl_->pairs.end() ? 0 : int(it->second.contacts.size());
 }
@@ -236,6 +238,7 @@ std::vector<ParticleContact> World::body_contacts(BodyId body, HandId hand) cons
   const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
+  impl_->complete_contacts(hand.index);
   auto it = impl_->pairs.find({hand.index, body.index});
   return it == impl_->pairs.end() ? std::vector<ParticleContact>() : it->second.contacts;
 }

@@ -166,8 +166,20 @@ struct HandBodyPair {
   // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
   std::vector<EntryFace> entry_faces, previous_faces;
   bool opposing_alone = false;  // this step: eq. 3 over this hand's contacts alone (decide_grasps)
-  // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1.
+  // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1. The
+  // hold path (docs/grasp.md "The hold path") collides only these two while the hand holds the body still.
   std::array<int, 2> witness{-1, -1};
+  // The hand's bones and the body's pose at the last full contact pass of a held pair (no bones: none): the hold
+  // path runs while no particle has moved farther than kHoldStill from where it was then, relative to the body.
+  std::vector<BoneTransform> anchor;
+  Pose anchor_pose;
+  // This step only. `still`: pose_hands found the hand still on the held body, so the body's particles were not
+  // skinned. `lazy`: `contacts` hold the witness pair alone; complete_contacts makes the full list from the
+  // body's pose and velocity and the step's dt as detect_contacts saw them (contact_*), when something reads it.
+  bool still = false, lazy = false;
+  Pose contact_pose;
+  BodyVelocity contact_velocity;
+  double contact_dt = 0;
 };
 
 // The world-level model: what add_* and remove_* build and a step only reads. With the *Model half of every live
@@ -244,6 +256,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   // Lazy particles (skinning.cpp): skin now / on read, and the coarse test that decides.
   void skin_particles(HandSlot& h);
   int skin_particles_in_reach(HandSlot& h);
+  void skin_witnesses(HandSlot& h);
   std::vector<double> near_boxes;  // scratch of skin_particles_in_reach
   std::vector<uint32_t> near_bodies;  // scratch of the broadphase queries
   void refresh_particles(HandSlot& h, bool deformed);
@@ -274,6 +287,17 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
                             std::vector<std::pair<int, int>>& ranges) const;
   StageReport deform_hands();
+  int deform_hand(uint32_t hand);
+  // The hold path (contacts.cpp): whether the hand holds the pair's body still since its anchor, the witness
+  // pass of a still pair, and the full contacts of a lazy pair made when read (every lazy pair of the hand,
+  // then its deformation). `hold_path` off: every held pair takes the full pass (tests compare the two).
+  bool hold_path = true;
+  bool holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const;
+  bool hold_by_witness(uint32_t hand, uint32_t body, HandBodyPair& pair, double dt);
+  void complete_contacts(uint32_t hand);
+  void complete_all_contacts();
+  std::vector<EntryFace> scratch_faces;          // hold_by_witness, complete_contacts
+  std::vector<ParticleContact> scratch_complete;  // complete_contacts
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
   std::vector<ParticleContact> scratch_contacts;       // detect_contacts, then deform_hands
   std::vector<std::pair<int, int>> scratch_ranges;     // detect_contacts

@@ -356,8 +356,10 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
       v.cache(c.depth);
     });
     v.cache(pair.opposing_alone);
-    v.cache(pair.witness[0]);  // a hint: where hand_intent looks first, the answer being the same
-    v.cache(pair.witness[1]);
+    v.state(pair.witness[0]);  // where hand_intent looks first, and the hold path's pair (docs/grasp.md)
+    v.state(pair.witness[1]);
+    v.list(pair.anchor, [&](auto& bone) { v.state(bone); });  // the hold path runs while the hand is still there
+    v.state(pair.anchor_pose);
   });
   // Bullet: its copy of every body (in Bullet's numbers) and its sleep.
   for (uint32_t h = 0; h < backend.bodies.size(); ++h) {
@@ -468,6 +470,13 @@ std::string World::Impl::inconsistency() const {
     if (!h.history.in_time_order() || !h.grip.in_time_order() || !h.articulation.in_time_order())
       return hand + " has a history out of time order";
   }
+  for (const auto& [key, pair] : pairs) {
+    const int particles = hands[key.first].model->particle_count();
+    const std::string name = "the pair of hand slot " + std::to_string(key.first) + " and body slot " + std::to_string(key.second);
+    for (int p : pair.witness)
+      if (p < -1 || p >= particles) return name + " has a witness particle out of range";
+    if (!pair.anchor.empty() && pair.anchor.size() != kHandJointCount) return name + " has an anchor of another hand";
+  }
   return {};
 }
 
@@ -479,6 +488,7 @@ uint64_t World::Impl::state_hash() const {
 }
 
 std::vector<uint8_t> World::Impl::save_state() {
+  complete_all_contacts();  // the saved contacts and deformation are whole, so a restored world reads them back
   const BackendState backend = backend_state_of(*this);
   Writer payload;
   visit_world(std::as_const(*this), backend, payload);

@@ -216,6 +216,22 @@ TEST(State, HashSeesEveryPieceOfStateThatDecidesTheFuture) {
            }
          FAIL() << "no entry face to perturb";
        }},
+      {"hold witness", [&] {
+         for (auto& [key, pair] : w.pairs)
+           if (pair.witness[0] >= 0) {
+             pair.witness[0] += 1;
+             return;
+           }
+         FAIL() << "no witness to perturb";
+       }},
+      {"hold anchor", [&] {
+         for (auto& [key, pair] : w.pairs)
+           if (!pair.anchor.empty()) {
+             pair.anchor[kIndexTip](0, 3) += 1e-9;
+             return;
+           }
+         FAIL() << "no anchor to perturb";
+       }},
       {"hand motion history", [&] { w.hands[0].history.push(w.hands[0].palm, w.time + 1); }},
       {"grip history", [&] { w.hands[0].grip.push(0.3, Vec3::Zero(), w.time + 1, 1.0); }},
       {"hand bones", [&] { w.hands[1].state.bones[3](0, 3) += 1e-9; }},
