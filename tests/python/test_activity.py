@@ -77,8 +77,8 @@ def test_a_thousand_static_boxes_and_a_far_hand_skip_bullet():
                                        pose=[0.1 * (i % 32), 0.02, 0.1 * (i // 32), 0, 0, 0, 1]))
     hand = world.add_hand(handsim.HandDef(handedness=handsim.Handedness.RIGHT))
     far = handsim.make_hand_frame(handsim.Handedness.RIGHT, [-5, 1.5, -5, 0, 0, 0, 1])
-    world.step(DT, [far])
-    world.step(DT, [far])
+    world.step(DT, {hand: far})
+    world.step(DT, {hand: far})
     report = world.last_step()
     assert not report.bullet and report.stage(handsim.Stage.DYNAMICS).work == 4  # 4 substeps, Bullet idle
     assert report.stage(handsim.Stage.CONTACTS).skip == handsim.SkipReason.NO_HAND_NEAR_BODY  # the broadphase
