@@ -100,7 +100,7 @@ def test_every_press_touches_the_top_face_only():
     hx, hy, hz = particles.BOX_HALF
     for x, z, depth, roll in particles.PRESSES:
         palm = particles._palm(x - cx, hy + drop - depth, z - cz, roll)
-        world.step(particles.DT, [handsim.make_hand_frame(particles.R, palm)])
+        world.step(particles.DT, {hand: handsim.make_hand_frame(particles.R, palm)})
         v = world.hand_render_vertices(hand)
         low = v[v[:, 1] < hy + reach]
         assert len(low) > 0
