@@ -246,7 +246,7 @@ def test_worlds_alive_together_share_a_hand_model_of_an_equal_definition():
     hands = [w.add_hand(d) for w, d in zip(worlds, defs)]
     particles = []
     for w, h in zip(worlds, hands):
-        w.step(1 / 60, [frame])
+        w.step(1 / 60, {h: frame})
         particles.append(np.asarray(w.hand_particles(h)))
     np.testing.assert_array_equal(particles[0], particles[1])
     assert worlds[0].state_hash() == worlds[1].state_hash()
