@@ -36,13 +36,13 @@ def test_a_huge_dt_raises_substeps_dropped_for_that_step_only():
 
 def test_a_teleporting_palm_warns():
     world = handsim.World()
-    world.add_hand(handsim.HandDef())
+    hand = world.add_hand(handsim.HandDef())
     here = handsim.make_hand_frame(handsim.Handedness.RIGHT, [0, 0.3, 0, 0, 0, 0, 1])
-    assert world.step(DT, [here]).warnings == 0
-    assert world.step(DT, [here]).warnings == 0
+    assert world.step(DT, {hand: here}).warnings == 0
+    assert world.step(DT, {hand: here}).warnings == 0
     far = handsim.make_hand_frame(handsim.Handedness.RIGHT, [1e6, 0.3, 0, 0, 0, 0, 1])
-    assert world.step(DT, [far]).has(handsim.StepWarning.HAND_TELEPORTED)
-    assert not world.step(DT, [far]).has(handsim.StepWarning.HAND_TELEPORTED)
+    assert world.step(DT, {hand: far}).has(handsim.StepWarning.HAND_TELEPORTED)
+    assert not world.step(DT, {hand: far}).has(handsim.StepWarning.HAND_TELEPORTED)
 
 
 def test_joint_solved_is_false_the_frame_after_the_hand_leaves():
@@ -53,8 +53,8 @@ def test_joint_solved_is_false_the_frame_after_the_hand_leaves():
     for i in range(50):  # the hand closes its pinch on the lip (closing_grip: 15 frames), then swings
         angle = min(max((i - 20) / 30, 0.0), 1.0) * 0.5
         palm = box.lid_pinch_palm(world, handsim.Handedness.RIGHT, angle)
-        world.step(DT, [handsim.make_hand_frame(handsim.Handedness.RIGHT, palm,
-                                                params=handsim.closing_grip(pinch, i * DT))])
+        world.step(DT, {hand: handsim.make_hand_frame(handsim.Handedness.RIGHT, palm,
+                                                      params=handsim.closing_grip(pinch, i * DT))})
     assert world.body_grasp(box.lid).grasped and world.joint_state(box.hinge).solved
     world.remove_hand(hand)
     world.step(DT)
