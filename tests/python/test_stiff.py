@@ -121,7 +121,7 @@ def bad_frames_and_time_steps_change_nothing(s):
         (lambda: frame(tip, position=[0, math.inf, -0.3]), "joints[10].position"),
         (lambda: frame(wrist, orientation=[0, 0, 0, 0]), "joints[1].orientation"),
         (lambda: frame(wrist, orientation=[2, 0, 0, 0]), "joints[1].orientation"),
-        *[(lambda dt=dt: s.world.step(dt, [good]), "dt") for dt in (0.0, -DT, math.nan, math.inf)],
+        *[(lambda dt=dt: s.world.step(dt, {s.hands[0]: good}), "dt") for dt in (0.0, -DT, math.nan, math.inf)],
     ]
     for call, word in rows:
         with pytest.raises(handsim.InvalidArgumentError, match=re.escape(word)):
