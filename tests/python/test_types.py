@@ -70,7 +70,7 @@ def quick_world():
     world = handsim.World()
     hand = world.add_hand(handsim.HandDef(handedness=RIGHT))
     box = handsim.build_jewelry_box(world)
-    world.step(1 / 60, [handsim.make_hand_frame(RIGHT, [0, 0.3, 0.3, 0, 0, 0, 1])])
+    world.step(1 / 60, {hand: handsim.make_hand_frame(RIGHT, [0, 0.3, 0.3, 0, 0, 0, 1])})
     return world, hand, box
 
 
@@ -80,11 +80,11 @@ def attribute_arrays():
     frame = handsim.make_hand_frame(RIGHT, [0, 0.3, 0, 0, 0, 0, 1])
     model = world.hand_model(hand)
     grasp_world = handsim.World(handsim.WorldDef(ground=False, gravity=[0, 0, 0]))
-    grasp_world.add_hand(handsim.HandDef())
+    grasp_hand = grasp_world.add_hand(handsim.HandDef())
     plate = grasp_world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05, 0.001, 0.02]), mass=0.1,
                                                  pose=[0, 0.5, -0.08, 0, 0, 0, 1]))
     for _ in range(math.ceil(grasp_world.definition.grasp.grasp_time_s * 60 - 1e-9)):  # 60 Hz frames
-        grasp_world.step(1 / 60, [handsim.make_hand_frame(RIGHT, [0, 0.5, 0, 0, 0, 0, 1])])
+        grasp_world.step(1 / 60, {grasp_hand: handsim.make_hand_frame(RIGHT, [0, 0.5, 0, 0, 0, 0, 1])})
     out = {
         "HandFrame.positions": frame.positions, "HandFrame.orientations": frame.orientations,
         "HandFrame.radii": frame.radii, "HandFrame.valid": frame.valid, "HandFrame.palm_pose": frame.palm_pose,
