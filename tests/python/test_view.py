@@ -54,7 +54,7 @@ def test_describe_reads_without_changing_the_world():
         d = scene.Describer(world, {"base": box.base, "lid": box.lid, "hinge": box.hinge}, particles="all")
         h = []
         for i in range(30):
-            world.step(1 / 60, [_lid_pinch(world, box, 0.001 * i)])
+            world.step(1 / 60, {hand: _lid_pinch(world, box, 0.001 * i)})
             if viewing:
                 d.frame()
                 scene.Describer(world, particles="part").frame()
@@ -68,7 +68,7 @@ def test_frame_has_hand_box_contacts_and_hinge():
     names = {"base": box.base, "lid": box.lid, "hinge": box.hinge, "table": box.table}
     d = scene.Describer(world, names)
     for i in range(20):
-        world.step(1 / 60, [_lid_pinch(world, box)])
+        world.step(1 / 60, {hand: _lid_pinch(world, box)})
         f = d.frame()
     meshes = {m.name: m for m in f.meshes}
     model = world.hand_model(hand)
@@ -97,7 +97,7 @@ def test_grasped_body_is_highlighted_and_events_are_labelled():
     d = scene.Describer(world, {"base": box.base, "lid": box.lid, "hinge": box.hinge})
     grasped_frame = None
     for i in range(60):
-        world.step(1 / 60, [_lid_pinch(world, box, 0.0005 * i, i / 60)])
+        world.step(1 / 60, {hand: _lid_pinch(world, box, 0.0005 * i, i / 60)})
         f = d.frame()
         if world.body_grasp(box.lid).grasped and grasped_frame is None:
             grasped_frame = f
@@ -150,7 +150,7 @@ def test_render_puts_the_hand_and_box_where_the_camera_sees_them():
     """The offline renderer's picture passes the same check the browser screenshot must pass."""
     world, box, hand = _jewelry_world()
     for i in range(10):
-        world.step(1 / 60, [_lid_pinch(world, box)])
+        world.step(1 / 60, {hand: _lid_pinch(world, box)})
     f = scene.Describer(world, {"base": box.base, "lid": box.lid, "table": box.table}).frame()
     from handsim.view.viewer import default_camera
     cam = default_camera(f, 400, 300)
