@@ -231,7 +231,7 @@ def test_bind_pose_gives_the_bind_mesh(hand_world):
     world, hand = hand_world
     model = world.hand_model(hand)
     assert 38000 <= model.vertex_count <= 40000 and model.particle_count == 1182
-    world.step(DT, [model.bind])
+    world.step(DT, {hand: model.bind})
     assert world.hand_tracked(hand)
     vertices = world.hand_render_vertices(hand)
     assert vertices.shape == (model.vertex_count, 3)
@@ -246,7 +246,7 @@ def test_bind_pose_gives_the_bind_mesh(hand_world):
 def test_rigid_motion_of_all_joints_moves_the_mesh_rigidly(hand_world):
     world, hand = hand_world
     model = world.hand_model(hand)
-    world.step(DT, [model.bind.transformed(MOTION)])
+    world.step(DT, {hand: model.bind.transformed(MOTION)})
     expected = model.bind_vertices @ quat_matrix(MOTION[3:]).T + MOTION[:3]
     assert np.abs(world.hand_render_vertices(hand) - expected).max() <= 1e-12
     assert np.abs(world.hand_particles(hand) - expected[model.particle_vertex]).max() <= 1e-12
@@ -256,7 +256,7 @@ def test_rigid_motion_of_all_joints_moves_the_mesh_rigidly(hand_world):
 def test_bending_one_finger_moves_only_its_vertices(hand_world):
     world, hand = hand_world
     model = world.hand_model(hand)
-    world.step(DT, [handsim.make_hand_frame(RIGHT, curl=[0, 1, 0, 0, 0])])
+    world.step(DT, {hand: handsim.make_hand_frame(RIGHT, curl=[0, 1, 0, 0, 0])})
     moved = np.linalg.norm(world.hand_render_vertices(hand) - model.bind_vertices, axis=1)
     mesh = model.mesh
     index_bones = [handsim.INDEX_PROXIMAL, handsim.INDEX_INTERMEDIATE, handsim.INDEX_DISTAL, handsim.INDEX_TIP]
@@ -310,7 +310,7 @@ def pressed_world(with_box=True):
     model = world.hand_model(hand)
     lowest = model.bind_vertices[model.particle_vertex, 1].min()
     frame = handsim.make_hand_frame(RIGHT, [0, -lowest - 0.01, 0, 0, 0, 0, 1])
-    world.step(DT, [frame])
+    world.step(DT, {hand: frame})
     return world, hand, box, frame
 
 
@@ -404,11 +404,8 @@ def test_rejected_step_leaves_the_world_unchanged():
         world.step(DT, {hand: right})
     before, time, particles = world.state_hash(), world.time, world.hand_particles(hand)
     bad_calls = [
-        (handsim.InvalidArgumentError, r"^hands\[0\].handedness: ", lambda: world.step(DT, [handsim.bind_frame(LEFT)])),
-        (handsim.InvalidArgumentError, "^hands: got 2 frames but the world has 1 hands$", lambda: world.step(DT, [right, right])),
-        (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(0.0, [right])),
-        (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(math.nan, [right])),
-        (TypeError, r"^hands\[0\]: expected a HandFrame, got ndarray$", lambda: world.step(DT, [right.positions])),
+        (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(0.0, {hand: right})),
+        (handsim.InvalidArgumentError, "^dt: ", lambda: world.step(math.nan, {hand: right})),
         (TypeError, r"^hands: expected a dict \{HandId: HandFrame\}, got HandFrame$", lambda: world.step(DT, right)),
         (handsim.InvalidArgumentError, r"^hands\[HandId\(index=0, generation=\d+\)\]\.handedness: ",
          lambda: world.step(DT, {hand: handsim.bind_frame(LEFT)})),
@@ -437,7 +434,7 @@ def test_grasp_events_and_stage_reports():
     frames_to_grasp = math.ceil(world.definition.grasp.grasp_time_s / DT - 1e-9)  # grasp_time_s at 60 Hz
     types = []
     for _ in range(frames_to_grasp):
-        world.step(DT, [handsim.make_hand_frame(RIGHT, palm)])
+        world.step(DT, {hand: handsim.make_hand_frame(RIGHT, palm)})
         types += [e.type for e in world.events()]
     assert types == [handsim.EventType.CONTACT_BEGIN, handsim.EventType.GRASP_BEGIN]
     grasp = world.body_grasp(plate)
@@ -449,7 +446,7 @@ def test_grasp_events_and_stage_reports():
     for i in range(10):
         palm[1] += 0.001
         palm[3:] = unit_quat(0, math.sin(0.005 * i), 0, math.cos(0.005 * i))
-        world.step(DT, [handsim.make_hand_frame(RIGHT, palm)])
+        world.step(DT, {hand: handsim.make_hand_frame(RIGHT, palm)})
         R = quat_matrix(palm[3:])
         assert np.abs(world.body_pose(plate)[:3] - (R @ relative[:3] + palm[:3])).max() <= 1e-9
     assert world.body_grasp(plate).grasped
@@ -580,9 +577,9 @@ def test_gltf_hand_skins_in_the_world(gltf_hands):
     hand = world.add_hand(handsim.HandDef(handedness=RIGHT), mesh, bind)
     model = world.hand_model(hand)
     assert model.vertex_count == 603 and model.particle_count == 603  # 1,182 clamped to the vertex count
-    world.step(DT, [bind])
+    world.step(DT, {hand: bind})
     np.testing.assert_allclose(world.hand_render_vertices(hand), mesh.positions[model.source_vertex], rtol=0, atol=1e-15)
-    world.step(DT, [bind.transformed(MOTION)])
+    world.step(DT, {hand: bind.transformed(MOTION)})
     expected = mesh.positions[model.source_vertex] @ quat_matrix(MOTION[3:]).T + MOTION[:3]
     assert np.abs(world.hand_render_vertices(hand) - expected).max() <= 1e-12
 
@@ -595,7 +592,7 @@ def test_gltf_hand_skins_in_the_world(gltf_hands):
     chain = list(range(handsim.INDEX_PROXIMAL, handsim.INDEX_TIP + 1))
     p[chain] = (p[chain] - pivot) @ Rt.T + pivot
     q[chain] = [quat_multiply(turn, qj) for qj in q[chain]]
-    world.step(DT, [handsim.HandFrame(RIGHT, p, q, r, v)])
+    world.step(DT, {hand: handsim.HandFrame(RIGHT, p, q, r, v)})
     bones = np.zeros((26, 3, 4))
     for j in range(26):
         Rj, Rb = quat_matrix(q[j]), quat_matrix(bind.orientations[j])
@@ -679,7 +676,7 @@ def test_gltf_rest_pose_is_the_skinned_bind_mesh(gltf_hands, tmp_path):
     assert moved[handsim.INDEX_TIP] > 0.05 and moved[handsim.MIDDLE_TIP] == 0
     world = handsim.World(handsim.WorldDef(ground=False))
     hand = world.add_hand(handsim.HandDef(handedness=LEFT), mesh0, bind0)
-    world.step(DT, [bind1])
+    world.step(DT, {hand: bind1})
     model = world.hand_model(hand)
     # Not exact: the file's node transforms match its inverse bind matrices only to float32 precision
     # (measured 4e-9 m here).

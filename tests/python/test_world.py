@@ -192,3 +192,12 @@ def test_step_list_form_is_deprecated_and_still_positional():
     with pytest.warns(DeprecationWarning, match=r"pass \{hand_id: frame, \.\.\.\} instead"):
         world.step(1 / 60, [handsim.make_hand_frame(right)])
     assert world.hand_tracked(hand)
+    # Its own argument errors: the items are checked one by one, and there are no more frames than hands.
+    before = world.state_hash()
+    frame = handsim.make_hand_frame(right)
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match=r"^hands\[0\]: expected a HandFrame, got ndarray$"):
+        world.step(1 / 60, [frame.positions])
+    with pytest.warns(DeprecationWarning), pytest.raises(
+            handsim.InvalidArgumentError, match="^hands: got 2 frames but the world has 1 hands$"):
+        world.step(1 / 60, [frame, frame])
+    assert world.state_hash() == before
