@@ -29,7 +29,7 @@ def _instances():
     hand = world.add_hand(_core.HandDef(particle_count=50))
     events = []
     for frame in range(60):
-        world.step(1 / 60, _core.scenario_frames(box, world, frame)[:1])
+        world.step(1 / 60, {hand: _core.scenario_frames(box, world, frame)[0]})  # the right hand's frame
         events += world.events()
     bind = _core.bind_frame(_core.Handedness.RIGHT)
     hinge = _core.solvers.make_hinge_frame(_core.HingeDef(lower=-1.0, upper=1.0))
