@@ -47,9 +47,11 @@
  * major.
  * 2.6: handsim_world_settings' reserved slot became push_model (HANDSIM_PUSH_*, how a hand moves a free body it
  * touches; docs/grasp.md "Push models"): the layout is unchanged, and 0, what a 2.5 host leaves there, is
- * HANDSIM_PUSH_FIT, the 2.5 behaviour. */
+ * HANDSIM_PUSH_FIT, the 2.5 behaviour.
+ * 2.7: handsim_grasp_settings gained pinch_reach at its end (the grip span's thumb term; 0, the default, is the
+ * span before). A layout change within the unreleased 2.x, as in 2.5. */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 6
+#define HANDSIM_ABI_VERSION_MINOR 7
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -147,6 +149,7 @@ typedef struct handsim_grasp_settings {
   double slip_distance;     /* m: a hand this far past a held body static geometry stopped: its grip slips */
   int32_t velocity_window;
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
+  double pinch_reach;       /* m: the grip span's thumb term is the thumb-index pad gap up to this (0: tip distance) */
 } handsim_grasp_settings;
 
 /* Mirrors handsim::WorldDef, field for field (the library's build checks it against the core's field table). */
@@ -454,8 +457,8 @@ HANDSIM_API int HANDSIM_CALL handsim_enum_value(int32_t index, handsim_enum_entr
 /* Defaults, identical to the C++ defaults. */
 HANDSIM_API int HANDSIM_CALL handsim_world_settings_default(handsim_world_settings* out_settings);
 /* Grasp rules for comparison (put one in handsim_world_settings.grasp; docs/grasp.md): the rule before the hand's
- * intent was read (GraspSettings::contacts(): eq. 3 with its hysteresis, closing_distance and opening_distance 0,
- * every other field the default), and eq. 3 as printed in the paper (GraspSettings::paper(): that with cos_threshold
+ * intent was read (GraspSettings::contacts(): eq. 3 with its hysteresis, closing_distance, opening_distance and
+ * pinch_reach 0, every other field the default), and eq. 3 as printed in the paper (GraspSettings::paper(): that with cos_threshold
  * +0.7, across_parts 0, grasp_time_s and release_time_s 0). */
 HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_contacts(handsim_grasp_settings* out_settings);
 HANDSIM_API int HANDSIM_CALL handsim_grasp_settings_paper(handsim_grasp_settings* out_settings);

@@ -187,9 +187,10 @@ namespace Handsim
         public double SlipDistance;
         public int VelocityWindow;
         public int AcrossParts;  // bool
+        public double PinchReach;
 
         /// <summary>The grasp rule before the hand's intent was read, for comparison (handsim_grasp_settings_contacts):
-        /// ClosingDistance and OpeningDistance 0, every other field the default.</summary>
+        /// ClosingDistance, OpeningDistance and PinchReach 0, every other field the default.</summary>
         public static GraspSettings Contacts
         {
             get { GraspSettings s; Native.Check(Native.handsim_grasp_settings_contacts(out s), "handsim_grasp_settings_contacts"); return s; }

@@ -91,6 +91,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("release_time_s", &GraspSettings::release_time_s)
       .def_readwrite("closing_distance", &GraspSettings::closing_distance)
       .def_readwrite("closing_window_s", &GraspSettings::closing_window_s)
+      .def_readwrite("pinch_reach", &GraspSettings::pinch_reach)
       .def_readwrite("opening_distance", &GraspSettings::opening_distance)
       .def_readwrite("squeeze_distance", &GraspSettings::squeeze_distance)
       .def_readwrite("pass_depth", &GraspSettings::pass_depth)
@@ -100,7 +101,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("velocity_window", &GraspSettings::velocity_window)
       .def_static("contacts", &GraspSettings::contacts,
                   "The grasp rule before the hand's intent was read, for comparison (docs/grasp.md): eq. 3 with its "
-                  "hysteresis, closing_distance and opening_distance 0, every other field the default.")
+                  "hysteresis, closing_distance, opening_distance and pinch_reach 0, every other field the default.")
       .def_static("paper", &GraspSettings::paper,
                   "Eq. 3 as printed in the paper, for comparison: contacts() with cos_threshold PAPER_LITERAL_COS, "
                   "any two contacts (across_parts False), grasp and release on the first frame.");

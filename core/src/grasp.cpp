@@ -126,6 +126,7 @@ GraspSettings GraspSettings::contacts() {
   GraspSettings s;
   s.closing_distance = 0;
   s.opening_distance = 0;
+  s.pinch_reach = 0;
   return s;
 }
 
@@ -147,6 +148,7 @@ void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) 
   validate::in_range(s.release_time_s, 0, 3600, prefix + "release_time_s", "s");
   validate::in_range(s.closing_distance, 0, 1, prefix + "closing_distance", "m");
   validate::in_range(s.closing_window_s, 0, 3600, prefix + "closing_window_s", "s");
+  validate::in_range(s.pinch_reach, 0, 1, prefix + "pinch_reach", "m");
   validate::in_range(s.opening_distance, 0, 1, prefix + "opening_distance", "m");
   validate::in_range(s.squeeze_distance, 0, 1, prefix + "squeeze_distance", "m");
   validate::in_range(s.pass_depth, 0, 1, prefix + "pass_depth", "m");
@@ -230,10 +232,15 @@ double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const
   return (w + s * u - t * v).norm() - (ra0 + s * (ra1 - ra0)) - (rb0 + t * (rb1 - rb0));
 }
 
-double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones) {
+double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
   auto joint = [&](int j) { return Vec3(bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
+  auto radius = [&](int j) { return model.bind.joints[j].radius; };  // the skin round the bones is the bind hand's
   const Vec3 palm = joint(kPalm);
-  double span = (joint(kThumbTip) - joint(kIndexTip)).norm();
+  double span = pinch_reach > 0
+                    ? std::min(pinch_reach, capsule_gap(joint(kThumbDistal), joint(kThumbTip), radius(kThumbDistal),
+                                                        radius(kThumbTip), joint(kIndexDistal), joint(kIndexTip),
+                                                        radius(kIndexDistal), radius(kIndexTip)))
+                    : (joint(kThumbTip) - joint(kIndexTip)).norm();
   for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) span += (joint(tip) - palm).norm();
   return span;
 }

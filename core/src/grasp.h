@@ -123,10 +123,12 @@ int rigid_part(const HandModel& model, int particle);
 double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const Vec3& b0, const Vec3& b1, double rb0,
                    double rb1);
 
-// The grip span of a hand (m): the four fingertips' distances to the palm joint plus the thumb tip's distance
-// to the index tip, at the joints of `bones` (skinning's B_j) and the model's bind pose. Closing a grab or a
-// pinch shortens it; moving or turning the hand as a whole does not change it.
-double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones);
+// The grip span of a hand (m): the four fingertips' distances to the palm joint plus the thumb's term, at the joints
+// of `bones` (skinning's B_j) and the model's bind pose. The thumb's term with pinch_reach > 0
+// (GraspSettings::pinch_reach) is the gap of the thumb's and the index's pads (capsule_gap round their distal -> tip
+// bones, the model's joint radii), at most pinch_reach; with 0 the thumb tip's distance to the index tip. Closing a
+// grab or a pinch shortens it; moving or turning the hand as a whole does not change it.
+double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach);
 
 // The hand's length in its bind pose (m): wrist joint to middle fingertip. Two hands squeeze a body only with their
 // palms farther apart than this (decide_grasps): a body narrower than a hand is long is one hand's to grip.

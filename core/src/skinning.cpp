@@ -403,7 +403,7 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
     h.palm = palm;
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
-    h.grip.push(grip_span(*h.model, h.state.bones), h.palm.position, time + dt, def.grasp.closing_window_s);
+    h.grip.push(grip_span(*h.model, h.state.bones, def.grasp.pinch_reach), h.palm.position, time + dt, def.grasp.closing_window_s);
     if (def.grasp.squeeze_distance > 0) h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
     if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not

@@ -884,8 +884,8 @@ static void test_mirrored_defs(void) {
   printf("mirrored defs: %d C fields, each a row of the def table\n", checked);
 }
 
-/* The contacts rule differs from the default only in the hand's closing and opening, the paper's from it in eq. 3's
- * reading and hysteresis; a grip closes from open. */
+/* The contacts rule differs from the default only in the hand's closing and opening (and the span's pinch reach), the
+ * paper's from it in eq. 3's reading and hysteresis; a grip closes from open. */
 static void test_grasp_rule_and_grips(void) {
   handsim_world_settings settings;
   handsim_grasp_settings contacts, paper, g;
@@ -895,8 +895,9 @@ static void test_grasp_rule_and_grips(void) {
   MUST(handsim_grasp_settings_paper(&paper));
   g = settings.grasp;
   CHECK(g.closing_distance > 0 && g.opening_distance > 0, "the default rule needs the hand to close and open");
-  g.closing_distance = g.opening_distance = 0;
-  CHECK(memcmp(&g, &contacts, sizeof g) == 0, "the contacts rule differs from the default in more than closing/opening");
+  g.closing_distance = g.opening_distance = g.pinch_reach = 0;
+  CHECK(memcmp(&g, &contacts, sizeof g) == 0,
+        "the contacts rule differs from the default in more than closing/opening and the pinch reach");
   CHECK(paper.cos_threshold == 0.7 && !paper.across_parts && paper.grasp_time_s == 0 && paper.release_time_s == 0 &&
             paper.closing_distance == 0 && paper.opening_distance == 0 && paper.release_distance == contacts.release_distance,
         "the paper's rule");

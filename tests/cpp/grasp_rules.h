@@ -17,6 +17,7 @@ enum class GraspRule { Contacts, Intent };
 inline GraspSettings grasp_rule(GraspRule rule, GraspSettings s = {}) {
   const GraspSettings r = rule == GraspRule::Intent ? GraspSettings{} : GraspSettings::contacts();
   s.closing_distance = r.closing_distance;
+  s.pinch_reach = r.pinch_reach;
   s.closing_window_s = r.closing_window_s;
   s.opening_distance = r.opening_distance;
   return s;

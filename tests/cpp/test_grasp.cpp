@@ -556,3 +556,39 @@ TEST(CapsuleGap, MatchesClosedFormAndBruteForce) {
   }
   std::printf("capsule_gap over the least gap, tapered: at most %.2f of the radii's change\n", worst);
 }
+
+// grip_span's thumb term (GraspSettings::pinch_reach): 0 is the tip joints' distance in full; > 0 is the thumb and
+// index pads' gap (capsule_gap with the model's joint radii), at most the reach. A thumb swinging towards the index
+// while its pad is beyond the reach closes the span by nothing; closing within the reach counts as the pads close.
+TEST(GripSpan, PinchReachCountsTheThumbOnlyNearTheIndex) {
+  const HandModel model = build_hand_model(HandDef{});
+  const Pose at{Vec3(0.1, 0.2, -0.3), Quat(Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()))};
+  auto bones = [&](double opposition, double spread, double curl = 0.2) {
+    HandPoseParams params;
+    params.curl = {0, curl, curl + 0.1, curl + 0.2, curl + 0.3};
+    params.thumb_opposition = opposition;
+    params.spread = spread;
+    HandState state;
+    pose_hand(model, make_hand_frame(Handedness::Right, at, params), state);
+    return std::make_pair(state.bones, make_hand_frame(Handedness::Right, at, params));
+  };
+  for (double opposition : {0.0, 0.2, 0.4, 0.7, 1.0})
+    for (double spread : {-0.2, 0.0, 0.8}) {
+      const auto [b, f] = bones(opposition, spread);
+      auto x = [&](int j) { return f.joints[j].position; };
+      auto r = [&](int j) { return model.bind.joints[j].radius; };
+      double fingers = 0;
+      for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) fingers += (x(tip) - x(kPalm)).norm();
+      const double pads = capsule_gap(x(kThumbDistal), x(kThumbTip), r(kThumbDistal), r(kThumbTip), x(kIndexDistal),
+                                      x(kIndexTip), r(kIndexDistal), r(kIndexTip));
+      EXPECT_NEAR(grip_span(model, b, 0), fingers + (x(kThumbTip) - x(kIndexTip)).norm(), 1e-12);
+      for (double reach : {0.02, 0.04, 0.065})
+        EXPECT_NEAR(grip_span(model, b, reach), fingers + std::min(reach, pads), 1e-12) << opposition << " " << reach;
+    }
+  // The flat hand's thumb swinging towards the index (opposition 0 -> 0.2: the tips 1 cm nearer, the pads 4.7 cm apart
+  // and more) closes nothing with a 4 cm reach; closing on from 0.4 to 1 (pads 3.7 -> 1.5 cm) counts as the pads close.
+  auto span = [&](double opposition, double reach) { return grip_span(model, bones(opposition, 0, 0).first, reach); };
+  EXPECT_GT(span(0, 0) - span(0.2, 0), 0.009);
+  EXPECT_NEAR(span(0, 0.04) - span(0.2, 0.04), 0.0, 1e-12);
+  EXPECT_GT(span(0.4, 0.04) - span(1.0, 0.04), 0.02);
+}

@@ -216,6 +216,19 @@ TEST(Step, PinchGraspsTheCube) {
   EXPECT_LT((s.world.body_pose(s.box).position - s.rest.position).norm(), 0.002);
 }
 
+// GraspSettings::pinch_reach: with the thumb term the pads' gap (6.5 cm reach), the synthetic pinch still closes its
+// span by more than closing_distance onto the cube and grasps it: its pads are 7.2 cm apart open (counted as 6.5)
+// and 4.9 cm at the hold.
+TEST(Step, PinchGraspsTheCubeWithThePadsReach) {
+  WorldDef def;
+  def.grasp.pinch_reach = 0.065;
+  Scene s(def);
+  s.grasp();
+  ASSERT_EQ(count(s.log, EventType::GraspBegin), 1);
+  EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+  EXPECT_LT((s.world.body_pose(s.box).position - s.rest.position).norm(), 0.002);
+}
+
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
 // it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
 // gives the same opposing contacts and is not grasped, though GraspSettings::contacts() grasps it (the default, the

@@ -15,6 +15,7 @@ def with_grasp_rule(rule, world_def=None):
     wd = world_def if world_def is not None else handsim.WorldDef()
     g = wd.grasp
     g.closing_distance, g.closing_window_s, g.opening_distance = r.closing_distance, r.closing_window_s, r.opening_distance
+    g.pinch_reach = r.pinch_reach
     wd.grasp = g
     return wd
 

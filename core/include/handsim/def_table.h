@@ -18,6 +18,7 @@
   X(GraspSettings, release_time_s)                                                                    \
   X(GraspSettings, closing_distance)                                                                  \
   X(GraspSettings, closing_window_s)                                                                  \
+  X(GraspSettings, pinch_reach)                                                                       \
   X(GraspSettings, opening_distance)                                                                  \
   X(GraspSettings, squeeze_distance)                                                                  \
   X(GraspSettings, pass_depth)                                                                        \
