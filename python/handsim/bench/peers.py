@@ -60,6 +60,9 @@ LID_HALF = (BASE_HALF[0], LID_HALF_THICK, BASE_HALF[2] + 0.5 * LID_OVERHANG)
 LID_CENTRE = np.array([0.0, 2 * BASE_HALF[1] + LID_HALF_THICK, 0.5 * LID_OVERHANG])
 LIP = np.array([0.0, LID_CENTRE[1], BASE_HALF[2] + LID_OVERHANG])  # middle of the lid's front edge, closed
 
+# MuJoCo at the issue's dt 1/60 s: reported beside its default 2 ms, but not its default setup (the goal's).
+MUJOCO_ISSUE_SETTING = "MuJoCo (dt 1/60)"
+
 CUBE_HALF = 0.025
 CUBE_MASS = 0.1
 CARRY = np.array([0.20, 0.0, 0.0])
@@ -399,7 +402,7 @@ class _Mujoco:
         import mujoco
         self.mj = mujoco
         self.timestep = timestep
-        self.label = "MuJoCo (dt 1/60)" if timestep == DT else f"MuJoCo (dt {timestep * 1e3:g} ms, its default)"
+        self.label = MUJOCO_ISSUE_SETTING if timestep == DT else f"MuJoCo (dt {timestep * 1e3:g} ms, its default)"
         self.steps = [round((i + 1) * DT / timestep) - round(i * DT / timestep) for i in range(FRAMES)]
 
     def _step(self, i):
@@ -554,12 +557,13 @@ def _ratios(rows):
 
 def goal_met(result):
     """Issue 25: handsim at or below every peer's default setup in cost (median), on both scenes, for the
-    default hand (1,182 particles in cube_carry)."""
+    default hand (1,182 particles in cube_carry). MuJoCo at dt 1/60 s is not its default setup: its row is reported,
+    not judged."""
     ok = True
     for scene, rows in result["scenes"].items():
         mine = "handsim" if scene == "lid_drag" else "handsim (1182 particles)"
         for r in rows:
-            if "handsim_over_peer" in r:
+            if "handsim_over_peer" in r and r["engine"] != MUJOCO_ISSUE_SETTING:
                 ok &= r["handsim_over_peer"][mine]["median"] <= 1.0
     return ok
 
@@ -583,7 +587,7 @@ def table(result):
                    + format_table(headers, body))
     load = result["load_average"]
     out.append(f"load average {load[0]:.2f} -> {load[1]:.2f} on {result['cpu_count']} cores; "
-               f"goal (handsim <= 1.0x every peer, median, both scenes): {'met' if result['goal_met'] else 'not met'}")
+               f"goal (handsim <= 1.0x every peer's default setup, median, both scenes): {'met' if result['goal_met'] else 'not met'}")
     return "\n\n".join(out)
 
 
@@ -606,6 +610,19 @@ def markdown(result):
     return "\n".join(out)
 
 
+def _issue_setting_note(result):
+    """The goal line's note on MuJoCo at the issue's dt 1/60 s, which the goal does not judge."""
+    ratios = []
+    for scene, rows in result["scenes"].items():
+        mine = "handsim" if scene == "lid_drag" else "handsim (1182 particles)"
+        for r in rows:
+            if r["engine"] == MUJOCO_ISSUE_SETTING and "handsim_over_peer" in r:
+                ratios.append(f"{scene} {r['handsim_over_peer'][mine]['median']:.2f}x")
+    if not ratios:
+        return ""
+    return f" Against {MUJOCO_ISSUE_SETTING} (the issue's setting, not its default): handsim / peer " + ", ".join(ratios) + "."
+
+
 def write_doc(result, docs):
     """The section "peers" of <docs>/performance.md (`docs`: the --doc folder)."""
     from . import replace_section
@@ -625,10 +642,13 @@ def write_doc(result, docs):
             "default 2 ms. The work is not the same: the peers move the lid or cube by a point or weld "
             "constraint to the target and simulate no hand, while handsim poses the tracked hand, skins the "
             "particles within reach, collides them with the body, decides the grasp (eq. 3), pushes penetrating "
-            "particles back to the surface and then solves the hinge in closed form.", "",
+            "particles back to the surface and then solves the hinge in closed form; while the hand holds the body "
+            "still (the lid drag, not the eased cube carry), only the witness pair of the grasp is skinned and "
+            "collided, the rest when read (docs/grasp.md \"The hold path\").", "",
             markdown(result),
-            "Goal (handsim <= 1.0x every peer's default setup, median, both scenes, default hand): "
-            + ("met." if result["goal_met"] else "**not met**, see the ratios above."), ""]
+            "Goal (handsim <= 1.0x every peer's default setup -- pybullet's, MuJoCo's 2 ms -- median, both scenes, "
+            "default hand): "
+            + ("met." if result["goal_met"] else "**not met**, see the ratios above.") + _issue_setting_note(result), ""]
     replace_section(Path(docs) / "performance.md", "peers", "\n".join(text))
 
 
