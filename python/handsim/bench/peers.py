@@ -60,9 +60,6 @@ LID_HALF = (BASE_HALF[0], LID_HALF_THICK, BASE_HALF[2] + 0.5 * LID_OVERHANG)
 LID_CENTRE = np.array([0.0, 2 * BASE_HALF[1] + LID_HALF_THICK, 0.5 * LID_OVERHANG])
 LIP = np.array([0.0, LID_CENTRE[1], BASE_HALF[2] + LID_OVERHANG])  # middle of the lid's front edge, closed
 
-# MuJoCo at the issue's dt 1/60 s: reported beside its default 2 ms, but not its default setup (the goal's).
-MUJOCO_ISSUE_SETTING = "MuJoCo (dt 1/60)"
-
 CUBE_HALF = 0.025
 CUBE_MASS = 0.1
 CARRY = np.array([0.20, 0.0, 0.0])
@@ -402,7 +399,7 @@ class _Mujoco:
         import mujoco
         self.mj = mujoco
         self.timestep = timestep
-        self.label = MUJOCO_ISSUE_SETTING if timestep == DT else f"MuJoCo (dt {timestep * 1e3:g} ms, its default)"
+        self.label = "MuJoCo (dt 1/60)" if timestep == DT else f"MuJoCo (dt {timestep * 1e3:g} ms, its default)"
         self.steps = [round((i + 1) * DT / timestep) - round(i * DT / timestep) for i in range(FRAMES)]
 
     def _step(self, i):
@@ -556,14 +553,15 @@ def _ratios(rows):
 
 
 def goal_met(result):
-    """Issue 25: handsim at or below every peer's default setup in cost (median), on both scenes, for the
-    default hand (1,182 particles in cube_carry). MuJoCo at dt 1/60 s is not its default setup: its row is reported,
-    not judged."""
+    """Issue 25's goal, as the issue states it: handsim at or below every peer row in cost (median) -- pybullet's
+    default (50 iterations), MuJoCo at dt 1/60 s (the setting the issue names) and at its 2 ms default -- on both
+    scenes, for the default hand (1,182 particles in cube_carry). The goal is the issue's; the bench does not pick
+    which rows count."""
     ok = True
     for scene, rows in result["scenes"].items():
         mine = "handsim" if scene == "lid_drag" else "handsim (1182 particles)"
         for r in rows:
-            if "handsim_over_peer" in r and r["engine"] != MUJOCO_ISSUE_SETTING:
+            if "handsim_over_peer" in r:
                 ok &= r["handsim_over_peer"][mine]["median"] <= 1.0
     return ok
 
@@ -587,7 +585,7 @@ def table(result):
                    + format_table(headers, body))
     load = result["load_average"]
     out.append(f"load average {load[0]:.2f} -> {load[1]:.2f} on {result['cpu_count']} cores; "
-               f"goal (handsim <= 1.0x every peer's default setup, median, both scenes): {'met' if result['goal_met'] else 'not met'}")
+               f"goal (handsim <= 1.0x every peer row, median, both scenes): {'met' if result['goal_met'] else 'not met'}")
     return "\n\n".join(out)
 
 
@@ -610,17 +608,15 @@ def markdown(result):
     return "\n".join(out)
 
 
-def _issue_setting_note(result):
-    """The goal line's note on MuJoCo at the issue's dt 1/60 s, which the goal does not judge."""
-    ratios = []
+def _goal_shortfall(result):
+    """The goal line's list of the peer rows handsim is slower than (median ratio > 1)."""
+    over = []
     for scene, rows in result["scenes"].items():
         mine = "handsim" if scene == "lid_drag" else "handsim (1182 particles)"
         for r in rows:
-            if r["engine"] == MUJOCO_ISSUE_SETTING and "handsim_over_peer" in r:
-                ratios.append(f"{scene} {r['handsim_over_peer'][mine]['median']:.2f}x")
-    if not ratios:
-        return ""
-    return f" Against {MUJOCO_ISSUE_SETTING} (the issue's setting, not its default): handsim / peer " + ", ".join(ratios) + "."
+            if "handsim_over_peer" in r and r["handsim_over_peer"][mine]["median"] > 1.0:
+                over.append(f"{scene} vs {r['engine']} {r['handsim_over_peer'][mine]['median']:.2f}x")
+    return (" Over 1.0x: " + ", ".join(over) + ".") if over else ""
 
 
 def write_doc(result, docs):
@@ -646,9 +642,9 @@ def write_doc(result, docs):
             "still (the lid drag, not the eased cube carry), only the witness pair of the grasp is skinned and "
             "collided, the rest when read (docs/grasp.md \"The hold path\").", "",
             markdown(result),
-            "Goal (handsim <= 1.0x every peer's default setup -- pybullet's, MuJoCo's 2 ms -- median, both scenes, "
-            "default hand): "
-            + ("met." if result["goal_met"] else "**not met**, see the ratios above.") + _issue_setting_note(result), ""]
+            "Goal (issue 25: handsim <= 1.0x every peer row -- pybullet's default, MuJoCo at dt 1/60 s and at its "
+            "2 ms default -- median, both scenes, default hand): "
+            + ("met." if result["goal_met"] else "**not met**, see the ratios above.") + _goal_shortfall(result), ""]
     replace_section(Path(docs) / "performance.md", "peers", "\n".join(text))
 
 
