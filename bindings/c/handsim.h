@@ -99,8 +99,8 @@ enum { HANDSIM_TERMINATION_CONVERGED = 0, HANDSIM_TERMINATION_MAX_ITERATIONS = 1
 enum { HANDSIM_LEFT = 0, HANDSIM_RIGHT = 1 };
 enum { HANDSIM_SAMPLING_RANDOM = 0, HANDSIM_SAMPLING_EVEN = 1 };
 enum { HANDSIM_CONTACTS_CLOSED_FORM = 0, HANDSIM_CONTACTS_BULLET_OBJECTS = 1 };
-/* WorldDef::push_model: eq. 2's fit as velocity (the default). */
-enum { HANDSIM_PUSH_FIT = 0 };
+/* WorldDef::push_model: eq. 2's fit as velocity (the default), or the pulp's bounded normal and friction impulses. */
+enum { HANDSIM_PUSH_FIT = 0, HANDSIM_PUSH_PHYSICAL = 1 };
 enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_EVENT_GRASP_BEGIN = 2,
        HANDSIM_EVENT_GRASP_END = 3 };
 enum { HANDSIM_REASON_NONE = 0, HANDSIM_REASON_RELEASED = 1, HANDSIM_REASON_TRACKING_LOST = 2,

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace handsim {
 namespace {
@@ -158,6 +159,7 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
                         int iterations) {
   BodyVelocity v = start;
   std::vector<double> pushed(contacts.size(), 0.0);  // impulse each contact has passed so far (N s)
+  std::vector<Vec3> dragged(contacts.size(), Vec3::Zero());  // and along the surface, by friction
   for (int sweep = 0; sweep < iterations; ++sweep) {
     for (size_t i = 0; i < contacts.size(); ++i) {
       const SkinContact& c = contacts[i];
@@ -167,30 +169,52 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
       const double response = body.inverse_mass + r.cross(in).dot(arm);  // speed along `in` per N s at the point
       if (!(response > 0)) continue;  // an immovable body
       const double speed = (v.linear + v.angular.cross(r)).dot(in);
-      const double total = std::clamp(pushed[i] + (c.needed_speed - speed) / response, 0.0, c.max_impulse);
+      const double total = std::clamp(pushed[i] + (c.hand_velocity.dot(in) - speed) / response, 0.0, c.max_impulse);
       const double impulse = total - pushed[i];
       pushed[i] = total;
       v.linear += body.inverse_mass * impulse * in;
       v.angular += impulse * arm;
+      if (!(c.friction > 0)) continue;
+      // Friction: the impulse along the surface that brings the point's sliding to the hand's, its sum over the
+      // sweeps kept within the cone |dragged| <= friction * pushed (Coulomb).
+      const Vec3 slip = c.hand_velocity - (v.linear + v.angular.cross(r));
+      const Vec3 along = slip - slip.dot(in) * in;
+      const double sliding = along.norm();
+      Vec3 total_drag = dragged[i];
+      if (sliding > 0) {
+        const Vec3 t = along / sliding;
+        const Vec3 arm_t = body.inverse_inertia * r.cross(t);
+        total_drag += sliding / (body.inverse_mass + r.cross(t).dot(arm_t)) * t;
+      }
+      const double cone = c.friction * pushed[i];
+      if (total_drag.norm() > cone) total_drag *= cone / total_drag.norm();
+      const Vec3 drag = total_drag - dragged[i];
+      dragged[i] = total_drag;
+      v.linear += body.inverse_mass * drag;
+      v.angular += body.inverse_inertia * r.cross(drag);
     }
   }
   return v;
 }
 
-// A contact within WorldDef::skin_depth as the pulp presses it. It keeps the body from entering the hand
-// further: the body must move away at the hand's own speed into it there (the palm's rigid motion). The pulp
-// does not spring back: it is strongly damped (it recovers over a few hundred ms), so a body lying in it stays
-// where the hand left it instead of being pushed out of a resting hand every frame. The pressure grows
-// linearly with the compression up to skin_pressure at skin_depth (beyond it the bone pushes, eq. 2), over the
-// skin area the particle stands for (hexagonal spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
-SkinContact World::Impl::skin_contact(const ParticleContact& c, const HandSlot& hand, double dt) const {
+// A contact as the pulp presses it (within WorldDef::skin_depth, or any contact of the physical push). It keeps
+// the body from entering the hand further: the body must move away at the hand's own speed into it there (the
+// palm's rigid motion). The pulp does not spring back: it is strongly damped (it recovers over a few hundred
+// ms), so a body lying in it stays where the hand left it instead of being pushed out of a resting hand every
+// frame. The pressure grows linearly with the compression up to skin_pressure at skin_depth and stays there
+// beyond it (the bone takes the rest; without a skin, skin_depth = 0, the pulp is fully compressed at once), over
+// the skin area the particle stands for (hexagonal spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
+// `friction`: the pulp's Coulomb coefficient along the surface (0: it only presses).
+SkinContact World::Impl::skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const {
   const double spacing = hand.model->particle_spacing;
   const double area = std::sqrt(3.0) / 2 * spacing * spacing;
+  const double compressed = def.skin_depth > 0 ? std::min(1.0, c.depth / def.skin_depth) : 1.0;
   SkinContact s;
   s.point = c.point;
   s.normal = c.normal;
-  s.needed_speed = -hand.history.point_velocity(c.point).dot(c.normal);
-  s.max_impulse = def.skin_pressure * (c.depth / def.skin_depth) * area * dt;
+  s.hand_velocity = hand.history.point_velocity(c.point);
+  s.max_impulse = def.skin_pressure * compressed * area * dt;
+  s.friction = friction;
   return s;
 }
 
@@ -207,18 +231,40 @@ InverseInertia World::Impl::inverse_inertia(const Body& b) const {
   return inv;
 }
 
-// A touched body gets the velocity eq. 2 or the skin gave it for this frame.
-void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt) {
+namespace {
+
+// `pose` moved for `t` seconds at a constant velocity (linear of its origin, angular about it).
+Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double t) {
+  const double turn = angular.norm() * t;
+  const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
+  return {pose.position + linear * t, (spin * pose.orientation).normalized()};
+}
+
+// The Coulomb coefficient of the finger pulp along a body's surface (PushModel::Physical). Measured dry finger-pad
+// friction against smooth materials (glass, metals, plastics) lies at about 0.5 to 1 and rises with sweat
+// (reviewed by Derler & Gerhardt, Tribology Letters 45, 2012); 0.5, the dry end, because a hand's grazing
+// contacts are as often the dry sides and backs of the fingers as moist pads.
+constexpr double kPulpFriction = 0.5;
+
+}  // namespace
+
+// A touched body gets the velocity eq. 2 or the skin gave it for this frame; `shift` (PushModel::Physical), when
+// given, first moves it by that rigid displacement (linear: of its centre, angular: its rotation vector) with no
+// velocity: the overlap removed, not turned into momentum.
+void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt,
+                                    const BodyVelocity* shift) {
+  const Pose from = shift ? advanced(b.pose, shift->linear, shift->angular, 1.0) : b.pose;
   if (b.jointed()) {
+    Joint& j = joints[b.hard_joint];
     // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
     b.supported = linear.dot(def.gravity) < 0;
+    // The displacement is set at once, as a grasped child's pose is (no joint rate from it).
+    if (shift) solve_grasped(def, bodies, j, from, dt);
     // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
-    const double turn = angular.norm() * dt;
-    const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
-    const Pose simulated{b.pose.position + linear * dt, (spin * b.pose.orientation).normalized()};
-    project_push(def, bodies, joints[b.hard_joint], simulated, dt);
+    project_push(def, bodies, j, advanced(from, linear, angular, dt), dt);
     return;
   }
+  b.pose = from;
   b.linear = linear;
   b.angular = angular;
   backend->write(b.backend, b.pose, b.linear, b.angular);
@@ -240,6 +286,8 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
   std::vector<Vec3>& from = scratch_from;
   std::vector<Vec3>& to = scratch_to;
   std::vector<SkinContact>& pressed = scratch_pressed;
+  std::vector<SkinContact>& overlap = scratch_overlap;
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
   std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
   held_groups.clear();
   for (uint32_t bi : held_bodies()) {
@@ -273,7 +321,9 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
     BodyVelocity carried;
     // Only the overlap beyond the skin is bone pushing the body (WorldDef::skin_depth; 0: all of it).
     const double skin = def.skin_depth;
+    const bool physical = def.push_model == PushModel::Physical;
     pressed.clear();
+    overlap.clear();
     for (size_t e = first; e < end; ++e) {
       const auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
@@ -281,18 +331,34 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
       const HandSlot& hand = hands[entry.first.first];
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
+        if (physical) {
+          // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below.
+          pressed.push_back(skin_contact(c, hand, dt, kPulpFriction));
+          if (c.depth > skin)
+            overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
+          continue;
+        }
         if (c.depth <= skin) {
-          pressed.push_back(skin_contact(c, hand, dt));
+          pressed.push_back(skin_contact(c, hand, dt, 0.0));
           continue;
         }
         from.push_back(c.point);
         to.push_back(c.point - c.normal * (c.depth - skin));  // where the surface must go to stop the penetration
       }
+      if (physical) continue;
       const BodyVelocity v = hand.history.attached_body_velocity(b.pose.position);
       carried.linear += double(from.size() - before) * v.linear;
       carried.angular += double(from.size() - before) * v.angular;
     }
-    if (!from.empty()) {
+    if (physical) {
+      if (pressed.empty()) continue;
+      // The pulp's bounded impulses set the velocity; the least displacement out of the bone's overlap moves the
+      // body without any (docs/grasp.md "Push models").
+      const InverseInertia inverse = inverse_inertia(b);
+      const BodyVelocity shift = skin_press(overlap, inverse, {});
+      const BodyVelocity v = skin_press(pressed, inverse, {b.linear, b.angular});
+      push_touched_body(b, v.linear, v.angular, dt, overlap.empty() ? nullptr : &shift);
+    } else if (!from.empty()) {
       const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
       push_touched_body(b, carried.linear / double(from.size()) + correction.linear,
                         carried.angular / double(from.size()) + correction.angular, dt);

@@ -71,15 +71,18 @@ Vec3 rotation_vector(const Mat3& R);
 // Throws handsim::Error when dt is not finite and > 0.
 BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_of_mass, double dt);
 
-// One contact of the contact skin (WorldDef::skin_depth): the pulp between a particle and a body presses it along
-// -normal. `needed_speed` (m/s) is the body's speed along -normal at `point` that keeps the overlap from growing
-// (the hand's own speed into the body); `max_impulse` (N s) is what the pulp's pressure passes to the body
-// within the frame.
+// One contact of the contact skin (WorldDef::skin_depth) or of the physical push (PushModel::Physical): the pulp
+// between a particle and a body presses it along -normal. `hand_velocity` (m/s) is the hand's velocity at `point`:
+// its component along -normal is the body's speed there that keeps the overlap from growing, its component along
+// the surface is what the pulp's friction drags the contact point towards. `max_impulse` (N s) is what the pulp's
+// pressure passes to the body within the frame; `friction` the Coulomb coefficient bounding the impulse along
+// the surface by friction times the contact's normal impulse (0: the pulp only presses).
 struct SkinContact {
   Vec3 point = Vec3::Zero();
   Vec3 normal = Vec3::UnitY();  // outward surface normal, unit
-  double needed_speed = 0;
+  Vec3 hand_velocity = Vec3::Zero();
   double max_impulse = 0;
+  double friction = 0;
 };
 
 // A rigid body's inverse mass properties about its centre of mass, world frame.
@@ -90,11 +93,15 @@ struct InverseInertia {
 };
 
 // The body's velocity after the skin's impulses: each contact pushes (never pulls) at its point until the body
-// moves away there at its needed speed, by at most its max_impulse; the contacts share the work by projected
-// Gauss-Seidel over `iterations` sweeps in their given order (deterministic). So a light body is carried along
-// by the hand (not faster: no contact gets more than it needs), a heavy one by no more than the pulp's force,
-// and every impulse acts at its contact point, so a body pressed onto its support gets an impulse its support
-// can take (Bullet's contact solver then cancels it) instead of eq. 2's fitted rotation.
+// moves away there at the hand's speed into it, by at most its max_impulse, and drags the point along the surface
+// towards the hand's velocity there by at most friction times what it pushed; the contacts share the work by
+// projected Gauss-Seidel over `iterations` sweeps in their given order (deterministic). So a light body is
+// carried along by the hand (not faster: no contact gets more than it needs), a heavy one by no more than the
+// pulp's force, and every impulse acts at its contact point, so a body pressed onto its support gets an impulse
+// its support can take (Bullet's contact solver then cancels it) instead of eq. 2's fitted rotation.
+// The same solve with unbounded impulses, no friction, a zero start and hand_velocity = -normal * overlap gives
+// the least rigid displacement (in the body's mass and inertia metric) that moves every contact out by its
+// overlap: the physical push removes the overlap with it (World::Impl::fit_touched_bodies).
 BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
                         int iterations = 8);
 

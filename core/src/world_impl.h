@@ -304,6 +304,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   std::vector<std::pair<int, int>> scratch_inside;     // deform_hands (displace_particles)
   std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
   std::vector<SkinContact> scratch_pressed;            // fit_touched_bodies: contacts within the skin
+  std::vector<SkinContact> scratch_overlap;            // fit_touched_bodies: the bone's overlap (PushModel::Physical)
   std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
   std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
   StageReport decide_grasps(double dt);
@@ -331,9 +332,10 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   Eigen::Matrix3Xd scratch_stop_points, scratch_stop_theirs;
   std::vector<std::pair<int, int>> scratch_stop_ranges;
   StageReport fit_touched_bodies(double dt);
-  SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt) const;
+  SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const;
   InverseInertia inverse_inertia(const Body& b) const;
-  void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt);
+  void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt,
+                         const BodyVelocity* shift = nullptr);
 
   // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
@@ -378,6 +380,9 @@ void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j
 // in one substep h; the Bullet constraint pulls it back.
 void drive_soft_children(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                          const std::vector<HandSlot>& hands, BulletBackend& backend, double h);
+// The child set at once to the coordinate nearest `simulated` (no rate from it): a grasped child, and the
+// physical push's displacement out of the overlap (PushModel::Physical).
+void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
 // Line 19 (eq. 4): a grasped hard child takes the coordinate nearest where its primary hand holds it, then
 // every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved.
 StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,

@@ -395,7 +395,6 @@ void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j
   }
 }
 
-namespace {
 void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt) {
   project_push(def, bodies, j, simulated, dt);
   if (!j.solved) return;
@@ -405,6 +404,8 @@ void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& 
     j.value = j.last.value;
   }
 }
+
+namespace {
 
 void read_soft_joint(const std::vector<Body>& bodies, Joint& j) {
   const Pose p = parent_pose(bodies, j), c = bodies[j.child].pose;

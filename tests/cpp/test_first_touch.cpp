@@ -81,23 +81,29 @@ constexpr double kDeg = M_PI / 180;
 
 // The issue's target: lowered at up to 20 cm/s and laid on it, at 30, 60 and 120 Hz, the plate and the cube move
 // <= 1 mm and turn <= 1 deg; the skin's full depth and less (1, 2, 3 mm of overlap at rest). Prints the worst case
-// without the skin too (docs/reliability.md "First touch" quotes both).
+// without the skin too, for both push models (docs/reliability.md "First touch" and docs/grasp.md "Push models"
+// quote them); the target is asserted for the default model with the skin.
 TEST(FirstTouch, HandLoweredOntoARestingBodyBarelyMovesIt) {
-  for (const Resting& body : {kPlate, kCube}) {
-    Touch off, on;
-    for (double hz : {30.0, 60.0, 120.0})
-      for (double speed : {0.05, 0.10, 0.20})
-        for (double rest : {0.001, 0.002, 0.003}) {
-          const Touch a = lower_onto(WorldDef{}, body, speed, hz, rest);
-          const Touch b = lower_onto(with_skin(), body, speed, hz, rest);
-          off = {std::max(off.moved, a.moved), std::max(off.tilted, a.tilted)};
-          on = {std::max(on.moved, b.moved), std::max(on.tilted, b.tilted)};
-          EXPECT_LE(b.moved, 1e-3) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
-          EXPECT_LE(b.tilted, 1 * kDeg) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
-        }
-    std::printf("first touch, %s: worst over 27 runs without skin %.2f mm %.2f deg, with 3 mm skin %.3f mm %.3f deg\n",
-                body.name, off.moved * 1e3, off.tilted / kDeg, on.moved * 1e3, on.tilted / kDeg);
-  }
+  for (PushModel model : {PushModel::Fit, PushModel::Physical})
+    for (const Resting& body : {kPlate, kCube}) {
+      Touch off, on;
+      for (double hz : {30.0, 60.0, 120.0})
+        for (double speed : {0.05, 0.10, 0.20})
+          for (double rest : {0.001, 0.002, 0.003}) {
+            WorldDef bare, skin = with_skin();
+            bare.push_model = skin.push_model = model;
+            const Touch a = lower_onto(bare, body, speed, hz, rest);
+            const Touch b = lower_onto(skin, body, speed, hz, rest);
+            off = {std::max(off.moved, a.moved), std::max(off.tilted, a.tilted)};
+            on = {std::max(on.moved, b.moved), std::max(on.tilted, b.tilted)};
+            if (model != PushModel::Fit) continue;
+            EXPECT_LE(b.moved, 1e-3) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
+            EXPECT_LE(b.tilted, 1 * kDeg) << body.name << " " << hz << " Hz " << speed << " m/s rest " << rest;
+          }
+      std::printf("first touch, %s push, %s: worst over 27 runs without skin %.2f mm %.2f deg, with 3 mm skin "
+                  "%.3f mm %.3f deg\n", model == PushModel::Fit ? "fit" : "physical", body.name, off.moved * 1e3,
+                  off.tilted / kDeg, on.moved * 1e3, on.tilted / kDeg);
+    }
 }
 
 // A push on purpose still pushes: the flat palm (thumb up) driven sideways at 25 cm/s into the cube slides it
@@ -177,7 +183,7 @@ TEST(FirstTouch, SkinSettingsOutsideTheirRangeAreRefused) {
         },
         Error);
   }
-  for (int bad : {-1, 1}) {
+  for (int bad : {-1, 2}) {
     WorldDef def;
     def.push_model = PushModel(bad);
     EXPECT_THROW(
@@ -188,3 +194,68 @@ TEST(FirstTouch, SkinSettingsOutsideTheirRangeAreRefused) {
         Error);
   }
 }
+
+namespace {
+
+// The flat palm (thumb up, as in PushAt25CmPerSecondStillMovesTheBody) driven along +x at `speed` into a free
+// 4 cm, 100 g cube in a world without gravity or ground, from 2-3 cm short of it, for `push_s` seconds, then held
+// still; the cube's speed 0.3 s after the palm stopped (it has left the palm by then). Steps at `hz`.
+double pushed_speed(PushModel model, double hz, double speed, double push_s) {
+  WorldDef def;
+  def.gravity = Vec3::Zero();
+  def.ground = false;
+  def.push_model = model;
+  World world(def);
+  const HandId hand = world.add_hand(HandDef{});
+  BodyDef bd;
+  bd.shape = ShapeDef::box(kCube.half);
+  bd.mass = kCube.mass;
+  const BodyId cube = world.add_body(bd);
+  const double dt = 1 / hz;
+  const Quat thumb_up(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()));
+  // Where the palm's particles facing the cube are: its pose's x where they touch the cube's -x face.
+  HandState state;
+  pose_hand(world.hand_model(hand), make_hand_frame(Handedness::Right, Pose{Vec3::Zero(), thumb_up}), state);
+  double front = -1e9;
+  for (Eigen::Index p = 0; p < state.tracked_positions.cols(); ++p) {
+    const Vec3 x = state.tracked_positions.col(p);
+    if (std::abs(x.y()) < kCube.half.y() && std::abs(x.z() - 0.02) < kCube.half.z()) front = std::max(front, x.x());
+  }
+  const double r = world.hand_model(hand).particle_radius;
+  const double start = -kCube.half.x() - r - front - 0.02;
+  const int pushing = int(std::lround(push_s * hz)), after = int(std::lround(0.3 * hz));
+  for (int i = 1; i <= pushing + after; ++i) {
+    const double x = start + speed * std::min(i, pushing) * dt;
+    world.step(dt, {{hand, make_hand_frame(Handedness::Right, Pose{Vec3(x, 0, 0.02), thumb_up})}});
+  }
+  return world.body_linear_velocity(cube).norm();
+}
+
+}  // namespace
+
+// The same push at 30, 60 and 120 Hz leaves the body with the same speed (issue 20's frame-rate check). The palm
+// at 10 cm/s stops 0.3 s after it set off (a whole number of frames at every rate), a frame or two after its first
+// contact with the cube (printed: the cube is still at rest when it stops at 0.27 s). The physical push carries
+// the cube at the palm's speed while they touch and leaves it with that (an inelastic push): the three speeds
+// agree within 5 % of the palm's speed, the share by which one frame's contact depth can change the
+// Gauss-Seidel's split between the contacts. Eq. 2's fit (printed, not asserted) gives the overlap's correction
+// as velocity, so how deep the last frame overlapped, which the frame rate decides, sets what the cube keeps.
+TEST(FirstTouch, PhysicalPushLeavesTheSameSpeedAtEveryFrameRate) {
+  const double speed = 0.1;
+  for (PushModel model : {PushModel::Fit, PushModel::Physical}) {
+    double lo = 1e9, hi = 0;
+    for (double hz : {30.0, 60.0, 120.0}) {
+      const double v = pushed_speed(model, hz, speed, 0.3);
+      std::printf("push at 10 cm/s stopping just after the touch, %s, %.0f Hz: the cube leaves at %.4f m/s\n",
+                  model == PushModel::Fit ? "fit" : "physical", hz, v);
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+    if (model == PushModel::Physical) {
+      EXPECT_LE(hi - lo, 0.05 * speed) << "spread over the rates";
+      EXPECT_GT(lo, 0.5 * speed) << "it was pushed";
+      EXPECT_LE(hi, speed * 1.05) << "not faster than the palm";
+    }
+  }
+}
+

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace handsim;
@@ -300,7 +301,7 @@ TEST(SkinPress, PushesUpToTheNeededSpeedWithinTheImpulseAndNeverPulls) {
   SkinContact top;
   top.point = Vec3(0, 0.02, 0);
   top.normal = Vec3::UnitY();
-  top.needed_speed = 0.05;  // the hand comes down at 5 cm/s
+  top.hand_velocity = Vec3(0, -0.05, 0);  // the hand comes down at 5 cm/s
   top.max_impulse = 1.0;
   BodyVelocity v = skin_press({top}, body, {});
   EXPECT_NEAR(v.linear.y(), -0.05, 1e-12);  // carried along at the hand's speed, not faster
@@ -312,15 +313,78 @@ TEST(SkinPress, PushesUpToTheNeededSpeedWithinTheImpulseAndNeverPulls) {
   leaving.linear = Vec3(0, -0.2, 0);  // already moving away faster than the hand: nothing to do
   v = skin_press({top}, body, leaving);
   EXPECT_EQ(v.linear, leaving.linear);
-  top.needed_speed = -0.05;  // the hand lifts off: the skin does not pull the body after it
+  top.hand_velocity = Vec3(0, 0.05, 0);  // the hand lifts off: the skin does not pull the body after it
   v = skin_press({top}, body, {});
   EXPECT_EQ(v.linear, Vec3::Zero());
   SkinContact edge = top;  // off-centre: turns the body, and the contact point reaches the needed speed
   edge.point = Vec3(0.02, 0.02, 0);
-  edge.needed_speed = 0.05;
+  edge.hand_velocity = Vec3(0, -0.05, 0);
   edge.max_impulse = 1.0;
   v = skin_press({edge}, body, {}, 1);
   EXPECT_GT(v.angular.norm(), 0);
   EXPECT_NEAR((v.linear + v.angular.cross(edge.point)).dot(-edge.normal), 0.05, 1e-12);
   EXPECT_EQ(skin_press({edge}, InverseInertia{}, {}).linear, Vec3::Zero());  // static: immovable
+}
+
+// The physical push (PushModel::Physical) on one contact: the pulp pushes a free 100 g, 4 cm cube at an edge point
+// while the hand moves into it and along its surface. Whatever the bound and the hand's speed, the impulse is
+// within the pulp's bound and friction's cone, pushes (never pulls), leaves the contact point no faster than the
+// hand into the body (along the surface the push's turn may outrun what friction can hold), and gives the body no more kinetic energy than the work the hand's point does
+// (impulse . hand velocity; an inelastic push gives half of it to a body starting at rest).
+TEST(SkinPress, FrictionStaysInTheConeAndNoPushGivesMoreThanTheHandDoes) {
+  InverseInertia body;
+  const double mass = 0.1;
+  body.inverse_mass = 1 / mass;
+  body.inverse_inertia = Mat3::Identity() / (mass * 2.67e-5);
+  SkinContact c;
+  c.point = Vec3(0.015, 0.02, -0.01);
+  c.normal = Vec3::UnitY();
+  c.friction = 0.5;
+  for (double bound : {1e-5, 1e-3, 1.0})
+    for (const Vec3& hand : {Vec3(0.1, -0.05, 0), Vec3(0.3, -0.01, 0.2), Vec3(0, -0.2, 0), Vec3(0.1, 0.05, 0)}) {
+      c.max_impulse = bound;
+      c.hand_velocity = hand;
+      const BodyVelocity v = skin_press({c}, body, {});
+      const Vec3 impulse = mass * v.linear;  // one contact: all of the body's momentum came through it
+      const Vec3 in = -c.normal;
+      const double pushed = impulse.dot(in);
+      const Vec3 dragged = impulse - pushed * in;
+      EXPECT_GE(pushed, 0) << "never pulls";
+      EXPECT_LE(pushed, bound * (1 + 1e-12));
+      EXPECT_LE(dragged.norm(), c.friction * pushed * (1 + 1e-12) + 1e-15) << "Coulomb";
+      const Vec3 r = c.point - body.centre;
+      const Vec3 point = v.linear + v.angular.cross(r);
+      EXPECT_LE(point.dot(in), std::max(0.0, hand.dot(in)) + 1e-12) << "no faster than the hand into it";
+      const double energy = 0.5 * mass * v.linear.squaredNorm() +
+                            0.5 * v.angular.dot((body.inverse_inertia.inverse()) * v.angular);
+      EXPECT_LE(energy, std::max(0.0, impulse.dot(hand)) + 1e-15) << "no more than the hand's work";
+      if (hand.dot(in) <= 0) EXPECT_EQ(v.linear, Vec3::Zero()) << "a hand leaving the body does not move it";
+    }
+  // A body at rest under a still hand stays at rest; one sliding under it is slowed by friction, never reversed.
+  c.hand_velocity = Vec3::Zero();
+  c.max_impulse = 1.0;
+  BodyVelocity v = skin_press({c}, body, {});
+  EXPECT_EQ(v.linear, Vec3::Zero());
+  EXPECT_EQ(v.angular, Vec3::Zero());
+  BodyVelocity sliding;
+  sliding.linear = Vec3(0.2, 0.01, 0);  // moving into the still hand above it and along it
+  v = skin_press({c}, body, sliding);
+  EXPECT_GE(v.linear.x(), 0) << "friction stops the slide at most";
+  EXPECT_LT(v.linear.x(), 0.2);
+}
+
+// The same solve as the least displacement out of an overlap: unbounded, frictionless, from rest, the hand's
+// "velocity" -normal * overlap. A contact through the centre moves the body straight out by the overlap.
+TEST(SkinPress, TheLeastDisplacementOutOfAnOverlap) {
+  InverseInertia body;
+  body.inverse_mass = 10;
+  body.inverse_inertia = Mat3::Identity() / (0.1 * 2.67e-5);
+  SkinContact c;
+  c.point = Vec3(0, 0.02, 0);
+  c.normal = Vec3::UnitY();
+  c.hand_velocity = -c.normal * 0.002;
+  c.max_impulse = std::numeric_limits<double>::infinity();
+  const BodyVelocity shift = skin_press({c}, body, {});
+  EXPECT_NEAR(shift.linear.y(), -0.002, 1e-15);
+  EXPECT_LE(shift.angular.norm(), 1e-15);
 }

@@ -165,8 +165,8 @@ def test_bad_rules_name_the_field():
         intent.parse_rule("skin:skin_depth=abc")
     with pytest.raises(ValueError, match=r"world.skin_depth"):
         intent.parse_rule("skin:skin_depth=1")
-    name, w = intent.parse_rule("fit:push_model=fit")  # the push model, by name
-    assert intent._world_def_with(w).push_model == handsim.PushModel.FIT
+    name, w = intent.parse_rule("physical:push_model=physical")  # the push model, by name
+    assert intent._world_def_with(w).push_model == handsim.PushModel.PHYSICAL
     with pytest.raises(ValueError, match=r"WorldDef.push_model: bad value 'shove'"):
         intent.parse_rule("physical:push_model=shove")
 

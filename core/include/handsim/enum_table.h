@@ -77,7 +77,9 @@
 /* How a hand moves a free body it touches but does not hold (WorldDef::push_model; docs/grasp.md "Push models"). */
 #define HANDSIM_ENUM_PUSH_MODEL(X)                                                                        \
   /* eq. 2 (default): the hands' velocity at the body plus the least-squares fit of the overlap, per frame */ \
-  X(PushModel, Fit, 0, FIT, HANDSIM_PUSH_FIT)
+  X(PushModel, Fit, 0, FIT, HANDSIM_PUSH_FIT)                                                             \
+  /* the pulp's bounded normal and friction impulses; the overlap removed as a displacement, no velocity */ \
+  X(PushModel, Physical, 1, PHYSICAL, HANDSIM_PUSH_PHYSICAL)
 
 #define HANDSIM_ENUM_BODY_MOTION(X)                                                                       \
   X(BodyMotion, Static, 0, STATIC, HANDSIM_MOTION_STATIC)                                                 \

@@ -66,7 +66,10 @@ struct WorldDef {
   double skin_pressure = 20e3; // Pa, 0 .. 1e6
   // How a hand moves a free body it touches but does not hold (docs/grasp.md "Push models"). Fit (default):
   // eq. 2, the touching hands' velocity at the body plus the least-squares fit of the overlap, both given to the
-  // body as velocity.
+  // body as velocity. Physical: the pulp pushes with impulses at the contacts, along the normals (never pulling)
+  // and by Coulomb friction along the surface, each bounded by what the pulp passes in the frame (skin_pressure
+  // over the particle's skin area for dt); the overlap beyond skin_depth is removed as the least displacement,
+  // with no velocity, so a graze leaves no momentum in the body.
   using PushModel = handsim::PushModel;
   PushModel push_model = PushModel::Fit;
 };
