@@ -619,7 +619,7 @@ void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool z
     // over starts from there too.
     const HandSlot& h = hands[hi];
     Vec3 pushed;
-    b.pose = held_pose(b, &pushed);
+    b.pose = held_pose(def, bodies, *this, hands, stop_scratch, b, &pushed);
     if (!b.grasp.secondary.is_null()) hand_over(b);
     else release(b, zero_velocity ? BodyVelocity{} : stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed));
   }
@@ -659,14 +659,15 @@ void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
 
 // --- lines 10, 14: a grasped object keeps its pose relative to its primary hand (stopped by static geometry:
 // static_stop.cpp) ---
-StageReport World::Impl::follow_primary_hands() {
+StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                                 const std::vector<HandSlot>& hands, const BodyBoxes& boxes, StaticStopScratch& scratch) {
   int following = 0;
-  for (uint32_t bi : held_bodies()) {
+  for (uint32_t bi : held) {
     Body& b = bodies[bi];
     if (b.jointed() || b.soft_joint >= 0) continue;
     const HandSlot& h = hands[b.grasp.primary.index];
     Vec3 pushed;
-    b.pose = held_pose(b, &pushed);
+    b.pose = held_pose(def, bodies, boxes, hands, scratch, b, &pushed);
     const BodyVelocity v = stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed);
     b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
     b.angular = capped_speed(v.angular);

@@ -71,12 +71,11 @@ Vec3 satisfy(const std::vector<StaticStop>& stops) {
   return t;
 }
 
-}  // namespace
-
 // Every way `held` at `pose` is inside static geometry: a direction to push it and how deep it is in.
-void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<StaticStop>& out) {
+void static_stops(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                  StaticStopScratch& scratch, const Body& held, const Pose& pose, std::vector<StaticStop>& out) {
   out.clear();
-  Eigen::Matrix3Xd& points = scratch_stop_points;
+  Eigen::Matrix3Xd& points = scratch.points;
   double radius = 0;
   shape_points(held.prepared, pose, points, radius);
   if (def.ground)
@@ -86,9 +85,9 @@ void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<S
     }
   Vec3 lo, hi;
   local_box_in_world(held.prepared.local_lo, held.prepared.local_hi, pose, lo, hi);
-  bodies_near(lo, hi, 0, &near_bodies);
-  std::vector<ParticleContact>& contacts = scratch_stop_contacts;
-  for (uint32_t si : near_bodies) {
+  boxes.bodies_near(lo, hi, 0, &scratch.near);
+  std::vector<ParticleContact>& contacts = scratch.contacts;
+  for (uint32_t si : scratch.near) {
     const Body& s = bodies[si];
     if (!s.alive || s.declared != BodyMotion::Static) continue;
     contacts.clear();  // the held body's points in the static body
@@ -96,10 +95,10 @@ void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<S
     for (const ParticleContact& c : contacts) out.push_back({c.normal, c.depth});
     // The static body's points in the held body (a table's corner under a held box), the ones near it only: a
     // static mesh may have many.
-    Eigen::Matrix3Xd& theirs = scratch_stop_theirs;
+    Eigen::Matrix3Xd& theirs = scratch.theirs;
     double their_radius = 0;
     shape_points(s.prepared, s.pose, theirs, their_radius);
-    std::vector<std::pair<int, int>>& ranges = scratch_stop_ranges;
+    std::vector<std::pair<int, int>>& ranges = scratch.ranges;
     ranges.clear();
     for (int i = 0; i < int(theirs.cols()); ++i)
       if (((theirs.col(i).array() >= lo.array() - their_radius) && (theirs.col(i).array() <= hi.array() + their_radius)).all()) {
@@ -114,11 +113,12 @@ void World::Impl::static_stops(const Body& held, const Pose& pose, std::vector<S
 }
 
 // The translation that takes `held` at `pose` out of static geometry (zero when it is not in deeper than the slop).
-Vec3 World::Impl::static_push(const Body& held, const Pose& pose) {
-  std::vector<StaticStop>& stops = scratch_stops;
+Vec3 static_push(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                 StaticStopScratch& scratch, const Body& held, const Pose& pose) {
+  std::vector<StaticStop>& stops = scratch.stops;
   Vec3 total = Vec3::Zero();
   for (int q = 0; q < kQueries; ++q) {
-    static_stops(held, {pose.position + total, pose.orientation}, stops);
+    static_stops(def, bodies, boxes, scratch, held, {pose.position + total, pose.orientation}, stops);
     const Vec3 t = satisfy(stops);
     if (t.isZero(0)) break;
     total += t;
@@ -126,12 +126,15 @@ Vec3 World::Impl::static_push(const Body& held, const Pose& pose) {
   return total;
 }
 
+}  // namespace
+
 // Where the held body `b` is this frame: palm * T_rel of its primary hand, stopped by static geometry. A hand more
 // than slip_distance past the stopped body has its grip slip along it: T_rel is re-taken.
-Pose World::Impl::held_pose(Body& b, Vec3* pushed) {
+Pose held_pose(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+               const std::vector<HandSlot>& hands, StaticStopScratch& scratch, Body& b, Vec3* pushed) {
   const HandSlot& h = hands[b.grasp.primary.index];
   const Pose target = h.palm * b.grasp.primary_relative;
-  const Vec3 t = static_push(b, target);
+  const Vec3 t = static_push(def, bodies, boxes, scratch, b, target);
   if (pushed) *pushed = t;
   if (t.isZero(0)) return target;
   const Pose stopped{target.position + t, target.orientation};

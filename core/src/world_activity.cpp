@@ -42,8 +42,8 @@ void BodyBoxes::update_box(const std::vector<Body>& bodies, uint32_t bi) {
 // The sweep-and-prune order of the boxes: slots sorted by their box's lower x, so a query reads only the
 // boxes whose lower x lies within [query lo x - widest box, query hi x]. Re-sorted (insertion sort: the order
 // changes little from frame to frame) only after a box moved.
-void World::Impl::sort_boxes() const {
-  const size_t n = std::min(bodies.size(), body_boxes.size() / 6);
+void BodyBoxes::sort_boxes() const {
+  const size_t n = body_boxes.size() / 6;
   for (size_t i = box_order.size(); i < n; ++i) box_order.push_back(uint32_t(i));
   box_order.erase(std::remove_if(box_order.begin(), box_order.end(), [&](uint32_t i) { return i >= n; }),
                   box_order.end());
@@ -75,8 +75,8 @@ void World::Impl::refresh_moving_boxes() {
 
 // The broadphase: the live bodies whose box overlaps [lo, hi] grown by `margin`, in slot order (out), or
 // only whether there is one (out null).
-bool World::Impl::bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const {
-  if (box_order_dirty || box_order.size() != std::min(bodies.size(), body_boxes.size() / 6)) sort_boxes();
+bool BodyBoxes::bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const {
+  if (box_order_dirty || box_order.size() != body_boxes.size() / 6) sort_boxes();
   if (out) out->clear();
   const double qlo[3] = {lo.x() - margin, lo.y() - margin, lo.z() - margin};
   const double qhi[3] = {hi.x() + margin, hi.y() + margin, hi.z() + margin};
@@ -96,7 +96,7 @@ bool World::Impl::bodies_near(const Vec3& lo, const Vec3& hi, double margin, std
   return any;
 }
 
-bool World::Impl::box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const {
+bool BodyBoxes::box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const {
   return bodies_near(lo, hi, margin, nullptr);
 }
 

@@ -213,6 +213,20 @@ struct BodyBoxes {
   mutable bool box_order_dirty = true;
 
   void update_box(const std::vector<Body>& bodies, uint32_t body);  // after `body` moved, was added or removed
+  // The broadphase: the live bodies whose box overlaps [lo, hi] grown by `margin`, in slot order (out), or
+  // only whether there is one (out null). Every body slot has its box (add_body boxes it at once).
+  bool bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const;
+  bool box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const;
+  void sort_boxes() const;
+};
+
+// Scratch of the static stops (static_stop.cpp), kept so that a step allocates nothing once it has grown.
+struct StaticStopScratch {
+  std::vector<StaticStop> stops;
+  std::vector<ParticleContact> contacts;
+  Eigen::Matrix3Xd points, theirs;
+  std::vector<std::pair<int, int>> ranges;
+  std::vector<uint32_t> near;
 };
 
 // The world: its model and state, the slot tables (each slot both halves, world_impl.h above), Bullet (a
@@ -274,10 +288,10 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   void end_pair(uint32_t hand, uint32_t body, EventReason reason);
   void set_motion(Body& b, BodyMotion motion);
 
-  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it:
-  // pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps,
-  // follow_primary_hands and retake_secondary_hands grasp.cpp, fit_touched_bodies pose_fit.cpp, simulate
-  // dynamics.cpp, solve_joints world_joints.cpp. Each returns why it ran or had nothing to do.
+  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Members
+  // still: pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps
+  // grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
+  // why it ran or had nothing to do.
   // This step's frame of each hand slot, indexed like `hands` (null: no frame, the hand is untracked).
   using SlotFrames = std::vector<const HandFrame*>;
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
@@ -321,16 +335,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   bool hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
                     std::vector<int>& parts) const;
   double closing_needed() const;
-  StageReport follow_primary_hands();
-  // A held body stopped by static geometry (static_stop.cpp): where it is this frame (palm * T_rel pushed out of
-  // the ground and static bodies; T_rel re-taken when the grip slips), with the push in `pushed`.
-  Pose held_pose(Body& b, Vec3* pushed = nullptr);
-  Vec3 static_push(const Body& held, const Pose& pose);
-  void static_stops(const Body& held, const Pose& pose, std::vector<StaticStop>& out);
-  std::vector<StaticStop> scratch_stops;  // scratch of static_push
-  std::vector<ParticleContact> scratch_stop_contacts;
-  Eigen::Matrix3Xd scratch_stop_points, scratch_stop_theirs;
-  std::vector<std::pair<int, int>> scratch_stop_ranges;
+  StaticStopScratch stop_scratch;  // held_pose's, in follow_primary_hands and end_grasp
   StageReport fit_touched_bodies(double dt);
   SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const;
   InverseInertia inverse_inertia(const Body& b) const;
@@ -353,9 +358,6 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
 
   // What moves (world_activity.cpp).
   void refresh_moving_boxes();
-  bool box_near_any_body(const Vec3& lo, const Vec3& hi, double margin) const;
-  bool bodies_near(const Vec3& lo, const Vec3& hi, double margin, std::vector<uint32_t>* out) const;
-  void sort_boxes() const;
   const std::vector<uint32_t>& held_bodies();
   const std::vector<uint32_t>& dynamic_bodies();
 };
@@ -405,7 +407,17 @@ StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Bod
                      const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
                      const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, StepReport& report, double dt);
 
-// Grasps (grasp.cpp). Line 20 (eq. 5): each held body (`held`, held_bodies()) that a second hand holds re-takes
+// A held body stopped by static geometry (static_stop.cpp): where `b` is this frame (palm * T_rel of its primary
+// hand pushed out of the ground and the static bodies; T_rel re-taken when the grip slips), with the push in
+// `pushed`. `b` is one of `bodies`, whose static ones it reads through the broadphase.
+Pose held_pose(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+               const std::vector<HandSlot>& hands, StaticStopScratch& scratch, Body& b, Vec3* pushed = nullptr);
+
+// Grasps (grasp.cpp). Lines 10, 14: each held free body (`held`: held_bodies()) goes where its primary hand holds
+// it (held_pose), with that point's velocity; joint children are left to their joint.
+StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t>& held, std::vector<Body>& bodies,
+                                 const std::vector<HandSlot>& hands, const BodyBoxes& boxes, StaticStopScratch& scratch);
+// Line 20 (eq. 5): each held body (`held`, held_bodies()) that a second hand holds re-takes
 // its pose in that hand's palm frame, so the secondary hand slips along the body instead of dragging it.
 StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                                    const std::vector<HandSlot>& hands);

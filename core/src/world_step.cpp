@@ -36,7 +36,9 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Contacts, [&] { return w.detect_contacts(dt); });           // line 3
   stage(Stage::Deformation, [&] { return w.deform_hands(); });             // particles pushed back to the surface
   stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
-  stage(Stage::Attach, [&] { return w.follow_primary_hands(); });          // lines 10, 14
+  stage(Stage::Attach, [&] {                                                // lines 10, 14
+    return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
+  });
   stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
   stage(Stage::Dynamics, [&] {                                              // line 18
     return simulate(w, w, w.bodies, w.joints, w.hands, *w.backend, w.held_bodies(), w.dynamic_bodies(), w, w.report, dt);
