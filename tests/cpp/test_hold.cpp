@@ -13,6 +13,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <tuple>
 
 namespace handsim {
 struct WorldInternals {
@@ -194,19 +195,23 @@ TEST(HoldPath, TheDeterminismScenarioMovesTheSameWithAndWithoutIt) {
   auto build = [](bool hold_path) {
     auto w = std::make_unique<World>();
     JewelryBox box = build_jewelry_box(*w);
-    w->add_hand(HandDef{});
+    const HandId right = w->add_hand(HandDef{});
     HandDef left;
     left.handedness = Handedness::Left;
-    w->add_hand(left);
+    const std::array<HandId, 2> hands{right, w->add_hand(left)};
     WorldInternals::of(*w).hold_path = hold_path;
-    return std::pair{std::move(w), box};
+    return std::tuple{std::move(w), box, hands};
   };
-  auto [on, on_box] = build(true);
-  auto [off, off_box] = build(false);
+  auto [on, on_box, on_hands] = build(true);
+  auto [off, off_box, off_hands] = build(false);
+  // scenario_frames' right and left frame, to their hands.
+  auto inputs = [](const std::array<HandId, 2>& hands, const std::vector<HandFrame>& f) {
+    return std::vector<HandInput>{{hands[0], f[0]}, {hands[1], f[1]}};
+  };
   int lazy_frames = 0;
   for (int i = 0; i < kScenarioFrames; ++i) {
-    on->step(1.0 / 60.0, scenario_frames(on_box, *on, i));
-    off->step(1.0 / 60.0, scenario_frames(off_box, *off, i));
+    on->step(1.0 / 60.0, inputs(on_hands, scenario_frames(on_box, *on, i)));
+    off->step(1.0 / 60.0, inputs(off_hands, scenario_frames(off_box, *off, i)));
     for (const auto& [key, pair] : WorldInternals::of(*on).pairs) lazy_frames += pair.lazy;
     ASSERT_EQ(on->events().size(), off->events().size()) << "frame " << i;
     for (size_t k = 0; k < on->events().size(); ++k) ASSERT_EQ(on->events()[k].type, off->events()[k].type);
