@@ -4,7 +4,7 @@
 // contacts, deformed particles and render mesh when read, within what the carried entry faces allow (below);
 // and reading them changes nothing.
 #include "handsim/scenes.h"
-#include "world_impl.h"
+#include "world_internals.h"
 
 #include <gtest/gtest.h>
 
@@ -14,13 +14,6 @@
 #include <limits>
 #include <memory>
 #include <tuple>
-
-namespace handsim {
-struct WorldInternals {
-  using Impl = World::Impl;
-  static Impl& of(World& w) { return *w.impl_; }
-};
-}  // namespace handsim
 
 using namespace handsim;
 

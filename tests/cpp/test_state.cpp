@@ -3,7 +3,7 @@
 // under Bullet); bad bytes are refused naming "state" with the world intact; and the state hash sees every
 // piece of state that decides the future.
 #include "handsim/scenes.h"
-#include "world_impl.h"
+#include "world_internals.h"
 
 #include <gtest/gtest.h>
 
@@ -11,13 +11,6 @@
 #include <memory>
 #include <string>
 #include <tuple>
-
-namespace handsim {
-struct WorldInternals {
-  using Impl = World::Impl;
-  static Impl& of(World& w) { return *w.impl_; }
-};
-}  // namespace handsim
 
 using namespace handsim;
 

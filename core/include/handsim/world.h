@@ -254,7 +254,7 @@ class World {
   // Held by every member function for its whole call (a pointer so that World stays movable).
   std::unique_ptr<std::mutex> mutex_;
   std::unique_lock<std::mutex> lock() const { return std::unique_lock<std::mutex>(*mutex_); }
-  friend struct WorldInternals;  // tests/cpp/test_state.cpp perturbs the state piece by piece
+  friend struct WorldInternals;  // tests/cpp/world_internals.h: white-box access for test_state.cpp and test_hold.cpp
 };
 
 }  // namespace handsim
