@@ -9,6 +9,7 @@ import pytest
 import handsim
 from conftest import with_grasp_rule
 from handsim import experiments as X
+from handsim.experiments import __main__ as X_main
 from handsim import users as U
 
 
@@ -137,3 +138,18 @@ def test_world_def_of_the_conditions():
     assert X.box_def("soft").model == handsim.JointModel.SOFT
     with pytest.raises(ValueError):
         X.world_def("magic", -0.7)
+
+
+def test_a_rule_replaces_the_grasp_settings_and_the_push_but_not_the_conditions_threshold():
+    """--rule SPEC (the judge's syntax) runs every condition under another grasp rule or push model."""
+    wd = X.world_def("exact", -0.7, rule="physical:push_model=physical,pinch_reach=0.065")
+    assert wd.push_model == handsim.PushModel.PHYSICAL and wd.grasp.pinch_reach == 0.065
+    assert wd.grasp.cos_threshold == -0.7
+    assert X.world_def("exact", 0.7, rule="contacts").grasp.closing_distance == 0
+    assert X.world_def("exact", -0.7).push_model == handsim.PushModel.FIT
+    with pytest.raises(ValueError, match="pinch_reach"):
+        X.world_def("exact", -0.7, rule="bad:pinch_reach=-1")
+    with pytest.raises(SystemExit):
+        X_main.main(["--quick", "--rule", "bad:no_such_field=1"])
+    one = X.run_condition("exact", -0.7, 1, cells=(("close", 1),), rule="physical:push_model=physical")
+    assert len(one) == 1

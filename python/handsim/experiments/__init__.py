@@ -47,15 +47,23 @@ def have_ceres() -> bool:
     return bool(getattr(_h, "WITH_CERES", False))
 
 
-def world_def(method: str, threshold: float, full_paper: bool = False):
+def world_def(method: str, threshold: float, full_paper: bool = False, rule: Optional[str] = None):
     """The WorldDef of a condition. The paper method differs from ours in its micro-simulator (Ceres LM, 10
     iterations: ``box_def``); ``full_paper`` also runs the paper's whole pipeline (every stage every step, the
     render mesh skinned every step, one Bullet object per particle). Those stages change what a step costs,
     not what it computes (the contacts agree to 1e-17 m, ``bench hand``), so the 300-trial run leaves them
-    out and ``paper_cross_check`` replays users with them on to show the outcomes are the same."""
+    out and ``paper_cross_check`` replays users with them on to show the outcomes are the same. ``rule``: a
+    grasp rule in the judge's syntax (``handsim.intent.parse_rule``: "contacts", "NAME:field=value,...") whose
+    GraspSettings and push/skin fields replace the defaults; the condition's threshold still sets c."""
     if method not in METHODS:
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     wd = _h.WorldDef()
+    if rule is not None:
+        from ..intent import RULE_WORLD_FIELDS, parse_rule
+        ruled = parse_rule(rule)[1]
+        wd.grasp = ruled.grasp
+        for field in RULE_WORLD_FIELDS:
+            setattr(wd, field, getattr(ruled, field))
     grasp = wd.grasp
     grasp.cos_threshold = float(threshold)
     wd.grasp = grasp
@@ -123,10 +131,10 @@ class Bench:
     """One world per condition with a right and a left hand, reused for every trial of the condition: the
     hand models are built once per process (they cost ~0.1-0.4 s each); each trial rebuilds only the box."""
 
-    def __init__(self, method: str, threshold: float, full_paper: bool = False):
+    def __init__(self, method: str, threshold: float, full_paper: bool = False, rule: Optional[str] = None):
         _share_hand_models()
         self.method, self.threshold = method, threshold
-        self.world = _h.World(world_def(method, threshold, full_paper))
+        self.world = _h.World(world_def(method, threshold, full_paper, rule))
         self.right = self.world.add_hand(_h.HandDef(handedness=_h.Handedness.RIGHT))
         self.left = self.world.add_hand(_h.HandDef(handedness=_h.Handedness.LEFT))
         self.box = None
@@ -217,9 +225,9 @@ def trial_seed(index: int, task: str, hands: int) -> int:
 
 
 def run_condition(method: str, threshold: float, trials: int, cells=CELLS, trace_seed_index: int = 0,
-                  progress=None, full_paper: bool = False) -> List[TrialResult]:
-    """Every trial of one condition, in a fixed order (deterministic)."""
-    bench = Bench(method, threshold, full_paper)
+                  progress=None, full_paper: bool = False, rule: Optional[str] = None) -> List[TrialResult]:
+    """Every trial of one condition, in a fixed order (deterministic); ``rule`` as in ``world_def``."""
+    bench = Bench(method, threshold, full_paper, rule)
     out = []
     for task, hands in cells:
         for i in range(trials):
@@ -231,8 +239,8 @@ def run_condition(method: str, threshold: float, trials: int, cells=CELLS, trace
 
 
 def _cell_job(args):
-    method, threshold, trials, cell, full_paper = args
-    return run_condition(method, threshold, trials, (cell,), full_paper=full_paper)
+    method, threshold, trials, cell, full_paper, rule = args
+    return run_condition(method, threshold, trials, (cell,), full_paper=full_paper, rule=rule)
 
 
 def _run_jobs(jobs, workers: int = 1, runner=None):
@@ -244,18 +252,20 @@ def _run_jobs(jobs, workers: int = 1, runner=None):
     return [r for part in parts for r in part]
 
 
-def run_all(trials: int, methods=METHODS, thresholds=THRESHOLDS, cells=CELLS, workers: int = 1, runner=None):
+def run_all(trials: int, methods=METHODS, thresholds=THRESHOLDS, cells=CELLS, workers: int = 1, runner=None,
+            rule: Optional[str] = None):
     """All conditions; with workers > 1 (or a runner, e.g. handsim.runners.RayRunner) the (condition, task)
-    cells run in parallel (same results)."""
-    return _run_jobs([(m, c, trials, cell, False) for m in methods for c in thresholds for cell in cells],
+    cells run in parallel (same results); ``rule`` as in ``world_def``, for every condition."""
+    return _run_jobs([(m, c, trials, cell, False, rule) for m in methods for c in thresholds for cell in cells],
                      workers, runner)
 
 
-def paper_cross_check(results: List[TrialResult], trials: int, workers: int = 1, runner=None) -> dict:
+def paper_cross_check(results: List[TrialResult], trials: int, workers: int = 1, runner=None,
+                      rule: Optional[str] = None) -> dict:
     """Replays the first `trials` users of every paper-method cell with the paper's full pipeline and compares
     each with the same user's trial in `results`: how many ended the same (success, grasp count, drop), and
     the largest difference of the final lid angle (rad)."""
-    full = _run_jobs([("paper", c, trials, cell, True) for c in THRESHOLDS for cell in CELLS], workers, runner)
+    full = _run_jobs([("paper", c, trials, cell, True, rule) for c in THRESHOLDS for cell in CELLS], workers, runner)
     lean = {(r.threshold, r.task, r.hands, r.seed): r for r in results if r.method == "paper"}
     same, compared, angle = 0, 0, 0.0
     for f in full:

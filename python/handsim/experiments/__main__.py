@@ -250,7 +250,16 @@ def main(argv=None):
     ap.add_argument("--ray", nargs="?", const="", default=False, metavar="ADDRESS",
                     help="run the trials on Ray: a local Ray without ADDRESS, else the cluster at ADDRESS")
     ap.add_argument("--docs", default=None, help="folder to write experiments.md and img/ into (none: write nothing)")
+    ap.add_argument("--rule", default=None, metavar="SPEC",
+                    help="grasp rule for every condition, in the judge's syntax (python -m handsim.intent --rule): "
+                         "'contacts', 'paper' or 'NAME:field=value,...' (the condition still sets c)")
     args = ap.parse_args(argv)
+    if args.rule is not None:
+        from ..intent import parse_rule
+        try:
+            parse_rule(args.rule)
+        except ValueError as e:
+            ap.error(f"--rule: {e}")
     trials = 10 if args.quick else args.trials
     if trials < 1:
         ap.error("--trials must be >= 1")
@@ -260,9 +269,9 @@ def main(argv=None):
     t0 = time.perf_counter()
     from ..runners import make_runner
     runner = make_runner(args.ray, args.workers)
-    results = run_all(trials, runner=runner)
+    results = run_all(trials, runner=runner, rule=args.rule)
     n_check = min(trials, max(0, args.paper_check), 1 if args.quick else trials)
-    check = paper_cross_check(results, n_check, runner=runner)
+    check = paper_cross_check(results, n_check, runner=runner, rule=args.rule)
     seconds = time.perf_counter() - t0
     rows = summarize(results)
     if docs is not None:
@@ -273,6 +282,8 @@ def main(argv=None):
             "" if trials == DEFAULT_TRIALS and not args.quick else (" --quick" if args.quick else f" --trials {trials}"))
         if args.paper_check != PAPER_CHECK:
             command += f" --paper-check {args.paper_check}"
+        if args.rule is not None:
+            command += f" --rule {args.rule}"
         with open(os.path.join(docs, "experiments.md"), "w") as f:
             f.write(report(rows, results, trials, check, seconds, command, runner.describe()))
     if args.json:
