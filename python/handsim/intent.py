@@ -727,17 +727,21 @@ def parse_rule(spec: str) -> Tuple[str, object]:
     return name, world
 
 
-def _world_def_with(settings):
-    """A fresh judged WorldDef (no ground) from a rule: a WorldDef of parse_rule (its grasp settings and
-    RULE_WORLD_FIELDS), or GraspSettings alone."""
-    wd = _core.WorldDef(ground=False)
-    if isinstance(settings, _core.WorldDef):
-        wd.grasp = settings.grasp
+def apply_rule(target, rule):
+    """`target` (a WorldDef) with a rule's settings: a WorldDef of parse_rule gives its grasp settings and
+    RULE_WORLD_FIELDS, GraspSettings alone the grasp settings; the rest of `target` stays. Returns `target`."""
+    if isinstance(rule, _core.WorldDef):
+        target.grasp = rule.grasp
         for field in RULE_WORLD_FIELDS:
-            setattr(wd, field, getattr(settings, field))
+            setattr(target, field, getattr(rule, field))
     else:
-        wd.grasp = settings
-    return wd
+        target.grasp = rule
+    return target
+
+
+def _world_def_with(settings):
+    """A fresh judged WorldDef (no ground) from a rule (apply_rule)."""
+    return apply_rule(_core.WorldDef(ground=False), settings)
 
 
 def default_hand_defs():

@@ -59,11 +59,8 @@ def world_def(method: str, threshold: float, full_paper: bool = False, rule: Opt
         raise ValueError(f"method: expected one of {METHODS}, got {method!r}")
     wd = _h.WorldDef()
     if rule is not None:
-        from ..intent import RULE_WORLD_FIELDS, parse_rule
-        ruled = parse_rule(rule)[1]
-        wd.grasp = ruled.grasp
-        for field in RULE_WORLD_FIELDS:
-            setattr(wd, field, getattr(ruled, field))
+        from ..intent import apply_rule, parse_rule
+        apply_rule(wd, parse_rule(rule)[1])
     grasp = wd.grasp
     grasp.cos_threshold = float(threshold)
     wd.grasp = grasp
