@@ -374,13 +374,6 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
 
 namespace {
 
-// How far, at most, a particle may have moved relative to the held body since the anchor for the hold path to
-// run. 1 micrometre: far below what a hand tracker resolves (joint jitter is of the order of a millimetre,
-// docs/grasp.md "Release"), so a hand this close to where it was holds the body as it did, and far above the
-// rounding of a body's pose carried by its hand (1e-12 m at 10 km from the origin), so a hand that carries a
-// body without moving on it stays on the hold path.
-constexpr double kHoldStill = 1e-6;
-
 // A bone's transform (bind to world) as bind to the frame of a body whose world-to-body rotation is Rt.
 BoneTransform in_body(const Mat3& Rt, const Vec3& origin, const BoneTransform& bone) {
   BoneTransform m;

@@ -157,6 +157,13 @@ struct StaticStop {
   double depth;  // ... by this much to take one of its points out
 };
 
+// How far, at most, a particle may have moved relative to its held body since the pair's anchor (below) for the
+// hold path to run (contacts.cpp). 1 micrometre: far below what a hand tracker resolves (joint jitter is of the
+// order of a millimetre, docs/grasp.md "Release"), so a hand this close to where it was holds the body as it did,
+// and far above the rounding of a body's pose carried by its hand (1e-12 m at 10 km from the origin), so a hand
+// that carries a body without moving on it stays on the hold path.
+constexpr double kHoldStill = 1e-6;
+
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
 struct HandBodyPair {
   GraspTracker tracker;

@@ -24,7 +24,6 @@ namespace {
 // the first 3 s, then leaves. The pinch does not move on the lid while it drags it (the lid follows the hand in
 // closed form), so the hold path runs; the left hand's pair on the base takes the full pass throughout.
 constexpr int kFrames = 360;
-constexpr double kHoldStill = 1e-6;  // contacts.cpp's bound on how far a hand on the hold path moved on its body
 
 struct Box {
   World world;
