@@ -387,7 +387,7 @@ BoneTransform in_body(const Mat3& Rt, const Vec3& origin, const BoneTransform& b
 // Whether the pair is held by its hand, with a witness and an anchor, and no particle has moved more than
 // kHoldStill relative to the body since the anchor: per bone, a point p blended from it moved by
 // dR (p - j) + (dR j + dt), at most |dR| reach + |dR j + dt| (reach: its particles' farthest from its joint j).
-bool World::Impl::holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const {
+bool HandParticles::holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const {
   const uint32_t hand = uint32_t(&h - hands.data());
   if (pair.anchor.size() != kHandJointCount || !pair.tracker.grasped() || !b.held_by(hand) || pair.witness[0] < 0 ||
       pair.witness[0] == pair.witness[1])
@@ -408,24 +408,24 @@ bool World::Impl::holds_still(const HandSlot& h, const Body& b, const HandBodyPa
 // The witness pass of a still pair: its two particles (skinned alone in pose_hands) against the body, as the full
 // pass would collide them. True when both touch and still oppose: the pair's contacts are then the two, its
 // entry faces the anchor's with the witnesses' renewed, and the rest is made when read (lazy).
-bool World::Impl::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair, double dt) {
+bool HandParticles::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair, double dt) {
   const HandSlot& h = hands[hi];
   const Body& b = bodies[bi];
   const double radius = h.model->particle_radius, margin = def.grasp.release_distance;
   const int first = std::min(pair.witness[0], pair.witness[1]), second = std::max(pair.witness[0], pair.witness[1]);
-  std::vector<std::pair<int, int>>& ranges = scratch_ranges;
+  std::vector<std::pair<int, int>>& ranges = scratch.ranges;
   ranges.assign({{first, first + 1}, {second, second + 1}});
-  std::vector<ParticleContact>& found = scratch_complete;
+  std::vector<ParticleContact>& found = scratch.complete;
   found.clear();
   collide_particle_ranges(h.state.tracked_positions, ranges, radius + margin, b.prepared, b.pose, found);
   if (found.size() != 2) return false;
   for (ParticleContact& c : found) c.depth -= margin;
   keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt,
-                   pair.previous_faces, scratch_faces, found);
+                   pair.previous_faces, scratch.faces, found);
   if (!(found[0].normal.dot(found[1].normal) < def.grasp.cos_threshold)) return false;  // as witness_opposes
   pair.entry_faces = pair.previous_faces;
   auto by_particle = [](const EntryFace& f, int p) { return f.particle < p; };
-  for (const EntryFace& f : scratch_faces) {
+  for (const EntryFace& f : scratch.faces) {
     auto it = std::lower_bound(pair.entry_faces.begin(), pair.entry_faces.end(), f.particle, by_particle);
     if (it == pair.entry_faces.end() || it->particle != f.particle) return false;  // not touching at the anchor
     *it = f;
@@ -441,7 +441,7 @@ bool World::Impl::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair, 
 // The full contacts of the hand's lazy pairs, as the full pass of their step would have made them (its bones,
 // history, previous faces, and the body's pose and velocity then), and the hand's deformation from them.
 // Changes no state: the entry faces stay the carried ones, so reading does not change the future.
-void World::Impl::complete_contacts(uint32_t hi) {
+void HandParticles::complete_contacts(uint32_t hi) {
   bool any = false;
   HandSlot& h = hands[hi];
   for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it) {
@@ -452,14 +452,14 @@ void World::Impl::complete_contacts(uint32_t hi) {
     const double radius = h.model->particle_radius, margin = def.grasp.release_distance;
     Vec3 lo, hi_b;
     local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, pair.contact_pose, lo, hi_b);
-    near_particle_ranges(h, radius + margin, lo, hi_b, scratch_ranges);
-    std::vector<ParticleContact>& found = scratch_complete;
+    near_particle_ranges(h, radius + margin, lo, hi_b, scratch.ranges);
+    std::vector<ParticleContact>& found = scratch.complete;
     found.clear();
-    collide_particle_ranges(h.state.tracked_positions, scratch_ranges, radius + margin, b.prepared, pair.contact_pose,
+    collide_particle_ranges(h.state.tracked_positions, scratch.ranges, radius + margin, b.prepared, pair.contact_pose,
                             found);
     for (ParticleContact& c : found) c.depth -= margin;
     keep_entry_faces(h.state.tracked_positions, radius, b.prepared, pair.contact_pose, pair.contact_velocity, h.history,
-                     pair.contact_dt, pair.previous_faces, scratch_faces, found);
+                     pair.contact_dt, pair.previous_faces, scratch.faces, found);
     pair.contacts.swap(found);
     pair.lazy = false;
     any = true;
@@ -467,7 +467,7 @@ void World::Impl::complete_contacts(uint32_t hi) {
   if (any) deform_hand(hi);
 }
 
-void World::Impl::complete_all_contacts() {
+void HandParticles::complete_all_contacts() {
   for (uint32_t hi = 0; hi < hands.size(); ++hi)
     if (hands[hi].alive) complete_contacts(hi);
 }
@@ -480,9 +480,11 @@ StageReport World::Impl::detect_contacts(double dt) {
     entry.second.entry_faces.clear();
     entry.second.lazy = false;
   }
-  std::vector<ParticleContact>& found = scratch_contacts;  // swapped into the pairs: buffers are reused
+  HandParticles particles = this->particles();
+  std::vector<uint32_t>& near_bodies = particle_scratch.near_bodies;
+  std::vector<ParticleContact>& found = particle_scratch.contacts;  // swapped into the pairs: buffers are reused
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
-  std::vector<std::pair<int, int>>& ranges = scratch_ranges;
+  std::vector<std::pair<int, int>>& ranges = particle_scratch.ranges;
   const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
   int tested = 0, candidates = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
@@ -493,7 +495,7 @@ StageReport World::Impl::detect_contacts(double dt) {
     bool reskin = false;
     for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it) {
       if (!it->second.still) continue;
-      if (hold_by_witness(hi, it->first.second, it->second, dt)) {
+      if (particles.hold_by_witness(hi, it->first.second, it->second, dt)) {
         ++tested;
         candidates += 2;
       } else {
@@ -501,11 +503,11 @@ StageReport World::Impl::detect_contacts(double dt) {
         reskin = true;
       }
     }
-    if (reskin) skin_particles_in_reach(h);
+    if (reskin) particles.skin_particles_in_reach(h);
     // A hand far from every body (pose_hands) has no group within reach and cannot touch anything.
     if (!bullet && !def.paper_pipeline && h.reach_groups_only && h.reach_groups.empty()) continue;
     const double radius = h.model->particle_radius;
-    if (bullet || def.paper_pipeline) refresh_particles(h, false);
+    if (bullet || def.paper_pipeline) particles.refresh_particles(h, false);
     if (bullet) collide_bullet_particles(hi, per_body);
     // The broadphase (the widest margin); the paper pipeline tests every body.
     if (def.paper_pipeline) {
@@ -571,8 +573,8 @@ StageReport World::Impl::detect_contacts(double dt) {
 
 // The particle index ranges whose group box, grown by the contact reach, overlaps a body's world box: the
 // particles of the other groups are farther than `reach` from the body's bounds, so they cannot touch it.
-void World::Impl::near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
-                                       std::vector<std::pair<int, int>>& ranges) const {
+void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
+                          std::vector<std::pair<int, int>>& ranges) {
   ranges.clear();
   // A little slack over the reach, so a centre exactly at the reach is never dropped by rounding.
   const Vec3 grow = Vec3::Constant(reach * (1 + 1e-9) + 1e-12);

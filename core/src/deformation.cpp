@@ -164,19 +164,19 @@ void displace_particles(const HandModel& model, const Eigen::Matrix3Xd& tracked,
 }
 
 // --- local deformation: penetrating particles move back to the surface (what the user sees) ---
-StageReport World::Impl::deform_hands() {
+StageReport deform_hands(HandParticles& particles) {
   int deformed = 0;
-  for (uint32_t hi = 0; hi < hands.size(); ++hi)
-    if (hands[hi].alive && hands[hi].state.tracked) deformed += deform_hand(hi);
+  for (uint32_t hi = 0; hi < particles.hands.size(); ++hi)
+    if (particles.hands[hi].alive && particles.hands[hi].state.tracked) deformed += particles.deform_hand(hi);
   if (deformed == 0) return stage_skipped(SkipReason::NoParticleInside);
   return stage_work(deformed, deformed);
 }
 
 // One hand's deformation from its contacts of the frame (with a lazy pair's witnesses only until
 // complete_contacts redoes it); returns how many particles it displaced.
-int World::Impl::deform_hand(uint32_t hi) {
+int HandParticles::deform_hand(uint32_t hi) {
   HandSlot& h = hands[hi];
-  std::vector<ParticleContact>& all = scratch_contacts;
+  std::vector<ParticleContact>& all = scratch.contacts;
   all.clear();
   for (auto it = pairs.lower_bound({hi, 0}); it != pairs.end() && it->first.first == hi; ++it)
     for (const ParticleContact& c : it->second.contacts)
@@ -194,7 +194,7 @@ int World::Impl::deform_hand(uint32_t hi) {
     // Only the touching particles: their deformed centres are kept aside and the full deformed matrix is
     // made when read (refresh_particles), so 3 touching particles of 10,000 cost 3, not a 10,000 copy.
     displace_particles(*h.model, h.state.tracked_positions, all, h.state.displaced, h.displaced_centres,
-                       &scratch_inside);
+                       &scratch.inside);
     h.deformed_current = false;
   }
   return int(h.state.displaced.size());

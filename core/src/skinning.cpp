@@ -351,13 +351,14 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
 StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
   int tracked = 0, skinned = 0, in_reach = 0;
+  HandParticles particles = this->particles();
   for (auto& entry : pairs) entry.second.still = false;  // set below for the hands near a body
   for (uint32_t i = 0; i < hands.size(); ++i) {
     HandSlot& h = hands[i];
     if (!h.alive) continue;
     const HandFrame* frame = frames[i];
     if (!frame || !frame->tracked()) {
-      complete_contacts(i);  // the last frame's lazy contacts and deformation stay readable while it is away
+      particles.complete_contacts(i);  // the last frame's lazy contacts and deformation stay readable while it is away
       h.state.tracked = false;
       h.history.clear();  // a hand that comes back elsewhere must not be thrown across the room
       h.grip.clear();     // nor have closed on what it finds there
@@ -373,20 +374,20 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
     h.particles_current = false;
     coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
     if (def.paper_pipeline) {
-      skin_particles(h);
+      particles.skin_particles(h);
       ++skinned;
-    } else if (near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+    } else if (particles.near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
       // The hold path: a pair whose hand holds its body as it held it at the anchor skins only its witness
       // pair (skin_particles_in_reach leaves the body out).
       bool still = false;
       for (auto it = pairs.lower_bound({i, 0}); it != pairs.end() && it->first.first == i; ++it) {
         HandBodyPair& pair = it->second;
         pair.still = hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
-                     holds_still(h, bodies[it->first.second], pair);
+                     particles.holds_still(h, bodies[it->first.second], pair);
         still = still || pair.still;
       }
-      in_reach += skin_particles_in_reach(h);
-      if (still) skin_witnesses(h);
+      in_reach += particles.skin_particles_in_reach(h);
+      if (still) particles.skin_witnesses(h);
       ++skinned;
     } else {
       h.reach_groups.clear();  // far from every body: no contact is possible this frame
@@ -406,7 +407,7 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
     h.grip.push(grip_span(*h.model, h.state.bones, def.grasp.pinch_reach), h.palm.position, time + dt, def.grasp.closing_window_s);
     if (def.grasp.squeeze_distance > 0) h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
-    if (def.paper_pipeline) skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
+    if (def.paper_pipeline) particles.skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;
   }
   if (tracked == 0) return stage_skipped(SkipReason::NoTrackedHand);
@@ -418,23 +419,24 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
 // detect_contacts uses) are
 // skinned, each with its exact box; the others keep an empty box, so no contact test looks at them, and the
 // particles are skinned in full only if something reads them. Returns the number of particles skinned.
-int World::Impl::skin_particles_in_reach(HandSlot& h) {
+int HandParticles::skin_particles_in_reach(HandSlot& h) {
   const HandModel& m = *h.model;
   const SkinLayout& layout = m.particle_skin;
   const double reach = m.particle_radius;
   // The bodies near the hand at all: the only ones its groups need testing against.
   // Each grown by the margin detect_contacts gives it: the release distance for a body this hand holds, none
   // for the others (their contacts need real contact).
+  std::vector<double>& near_boxes = scratch.near_boxes;
   near_boxes.clear();
-  bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+  boxes.bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &scratch.near_bodies);
   const uint32_t hand = uint32_t(&h - hands.data());
-  for (uint32_t bi : near_bodies) {
+  for (uint32_t bi : scratch.near_bodies) {
     if (bodies[bi].held_by(hand)) {
       auto it = pairs.find({hand, bi});
       if (it != pairs.end() && it->second.still) continue;  // held still: its witness pair is skinned alone
     }
     const double margin = bodies[bi].held_by(hand) ? def.grasp.release_distance : 0.0;
-    for (int k = 0; k < 6; ++k) near_boxes.push_back(body_boxes[6 * bi + k] + (k < 3 ? -margin : margin));
+    for (int k = 0; k < 6; ++k) near_boxes.push_back(boxes.body_boxes[6 * bi + k] + (k < 3 ? -margin : margin));
   }
   h.state.tracked_positions.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
   h.group_bounds.resize(6 * layout.groups.size());
@@ -494,7 +496,7 @@ int World::Impl::skin_particles_in_reach(HandSlot& h) {
 // The witness pairs of the hand's still pairs (hold path): eq. 1 for those particles alone. Their groups keep the
 // boxes skin_particles_in_reach gave them (empty unless in reach of another body), so no other body's contact
 // test sees them unless it would have.
-void World::Impl::skin_witnesses(HandSlot& h) {
+void HandParticles::skin_witnesses(HandSlot& h) {
   const uint32_t hand = uint32_t(&h - hands.data());
   for (auto it = pairs.lower_bound({hand, 0}); it != pairs.end() && it->first.first == hand; ++it)
     if (it->second.still)
@@ -504,7 +506,7 @@ void World::Impl::skin_witnesses(HandSlot& h) {
 
 // Eq. 1 for the particles, with the box of each particle group for the contact prefilter; the hand's bounds
 // become the exact box of its particle spheres.
-void World::Impl::skin_particles(HandSlot& h) {
+void HandParticles::skin_particles(HandSlot& h) {
   const HandModel& m = *h.model;
   skin_layout(m.particle_skin, h.state.bones, h.state.tracked_positions, &h.group_bounds);
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -519,7 +521,7 @@ void World::Impl::skin_particles(HandSlot& h) {
 }
 
 // Brings the lazily skipped particle positions up to date (same arithmetic as in the step, so same bits).
-void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
+void HandParticles::refresh_particles(HandSlot& h, bool deformed) {
   if (!h.particles_current) skin_particles(h);
   if (deformed) complete_contacts(uint32_t(&h - hands.data()));  // a held body's lazy contacts deform it too
   if (deformed && !h.deformed_current) {
@@ -532,11 +534,11 @@ void World::Impl::refresh_particles(HandSlot& h, bool deformed) {
 
 // Whether a box (a hand's coarse bounds) comes within the release distance of any body's bounds: the widest
 // margin detect_contacts uses, so a hand that fails this test cannot have a contact.
-bool World::Impl::near_any_body(const Vec3& lo, const Vec3& hi) const {
-  return box_near_any_body(lo, hi, def.grasp.release_distance);
+bool HandParticles::near_any_body(const Vec3& lo, const Vec3& hi) const {
+  return boxes.box_near_any_body(lo, hi, def.grasp.release_distance);
 }
 
-void World::Impl::skin_render_mesh(HandSlot& h) {
+void HandParticles::skin_render_mesh(HandSlot& h) {
   complete_contacts(uint32_t(&h - hands.data()));  // the deformation reads every contact of the frame
   if (!h.state.displaced.empty()) refresh_particles(h, true);  // the deformation reads the displaced particles
   skin_groups(*h.model, h.state.bones, h.render, def.render_threads);

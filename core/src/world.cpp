@@ -170,7 +170,7 @@ void World::remove_body(BodyId id) {
   for (const Joint& j : w.joints)
     if (j.alive && (j.child == id.index || j.parent == id.index))
       validate::fail("body", "a joint still uses it; remove the joint first", Status::InvalidState);
-  w.complete_all_contacts();  // the hands' deformation of the last step, with this body's contacts, stays readable
+  w.particles().complete_all_contacts();  // the hands' deformation of the last step, with this body's contacts, stays readable
   // Let go of it first, so the hands' grasp state and the events stay consistent: every hand holding it
   // gets a GraspEnd, every hand touching it a ContactEnd, and no pair keeps the slot index it leaves behind.
   for (auto it = w.pairs.begin(); it != w.pairs.end();) {
@@ -229,7 +229,7 @@ int World::body_contact_count(BodyId body, HandId hand) const {
   const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
-  impl_->complete_contacts(hand.index);  // a held body's contacts beyond its witness pair are made when read
+  impl_->particles().complete_contacts(hand.index);  // a held body's contacts beyond its witness pair are made when read
   auto it = impl_->pairs.find({hand.index, body.index});
   return it == impl_->pairs.end() ? 0 : int(it->second.contacts.size());
 }
@@ -238,7 +238,7 @@ std::vector<ParticleContact> World::body_contacts(BodyId body, HandId hand) cons
   const auto held = lock();
   impl_->body(body);
   impl_->hand(hand);
-  impl_->complete_contacts(hand.index);
+  impl_->particles().complete_contacts(hand.index);
   auto it = impl_->pairs.find({hand.index, body.index});
   return it == impl_->pairs.end() ? std::vector<ParticleContact>() : it->second.contacts;
 }
@@ -330,14 +330,14 @@ Pose World::hand_palm_pose(HandId id) const {
 Eigen::Matrix3Xd World::hand_particles(HandId id, bool deformed) const {
   const auto held = lock();
   HandSlot& h = impl_->hand(id);
-  impl_->refresh_particles(h, deformed);
+  impl_->particles().refresh_particles(h, deformed);
   return deformed ? h.state.deformed_positions : h.state.tracked_positions;
 }
 
 Eigen::Matrix3Xd World::hand_render_vertices(HandId id) {
   const auto held = lock();
   HandSlot& h = impl_->hand(id);
-  if (h.render_dirty) impl_->skin_render_mesh(h);
+  if (h.render_dirty) impl_->particles().skin_render_mesh(h);
   return h.render;
 }
 Pose World::body_pose(BodyId id) const {

@@ -189,6 +189,9 @@ struct HandBodyPair {
   double contact_dt = 0;
 };
 
+// The pairs of a world, ordered by (hand slot, body slot) so every pass over them is deterministic.
+using HandBodyPairs = std::map<std::pair<uint32_t, uint32_t>, HandBodyPair>;
+
 // The world-level model: what add_* and remove_* build and a step only reads. With the *Model half of every live
 // slot of the tables below, it is what a restoring world must already have (model_fingerprint).
 struct WorldModel {
@@ -204,8 +207,7 @@ struct WorldState {
   double time = 0;
   double accumulator = 0;  // the part of a substep carried to the next frame
   int awake_bodies = 0;    // dynamic bodies Bullet still simulated after the last substep it ran
-  // Ordered by (hand slot, body slot) so every pass over pairs is deterministic.
-  std::map<std::pair<uint32_t, uint32_t>, HandBodyPair> pairs;
+  HandBodyPairs pairs;
   uint64_t nonfinite_recoveries = 0;  // Bullet results replaced by the last finite state (see substep)
   uint64_t idle_substeps = 0;         // substeps in which Bullet was skipped (nothing awake)
 };
@@ -235,6 +237,57 @@ struct StaticStopScratch {
   std::vector<std::pair<int, int>> ranges;
   std::vector<uint32_t> near;
 };
+
+// Scratch of the particle passes (skinning, contacts, deformation), kept so that a step allocates nothing once the
+// buffers have grown. Each pass clears what it uses first.
+struct ParticleScratch {
+  std::vector<double> near_boxes;       // skin_particles_in_reach
+  std::vector<uint32_t> near_bodies;    // the broadphase queries of skin_particles_in_reach and detect_contacts
+  std::vector<EntryFace> faces;         // hold_by_witness, complete_contacts
+  std::vector<ParticleContact> complete;  // hold_by_witness, complete_contacts
+  std::vector<ParticleContact> contacts;  // detect_contacts, then deform_hand
+  std::vector<std::pair<int, int>> ranges;  // detect_contacts, hold_by_witness, complete_contacts
+  std::vector<std::pair<int, int>> inside;  // deform_hand (displace_particles)
+};
+
+// The hands' particles as the skinning, contact and deformation stages share them and the readers (World's
+// particle, contact and render accessors, save_state, remove_body) complete them. A stage may leave work lazy:
+// the particles of a hand far from every body are not skinned (skinning.cpp), a still held pair's contacts beyond
+// its witness pair are not collided, nor the deformation made from them (the hold path, contacts.cpp); whoever
+// reads them makes them here from the step's own numbers, with the same bits the stage would have made.
+// Reads the world's def, bodies and their boxes; writes the hands' particle caches, the pairs' contacts and their
+// hold-path flags. A view over World::Impl's tables (World::Impl::particles()), made where it is used.
+struct HandParticles {
+  const WorldDef& def;
+  const std::vector<Body>& bodies;
+  const BodyBoxes& boxes;
+  std::vector<HandSlot>& hands;
+  HandBodyPairs& pairs;
+  ParticleScratch& scratch;
+  bool hold_path;  // off: every held pair takes the full contact pass (World::Impl::hold_path)
+
+  // Skinning (skinning.cpp): skin now, skin the groups within reach of a body, skin a still pair's witnesses,
+  // bring the skipped particles (deformed: and the lazy contacts and deformation) up to date, the render mesh.
+  void skin_particles(HandSlot& h);
+  int skin_particles_in_reach(HandSlot& h);
+  void skin_witnesses(HandSlot& h);
+  void refresh_particles(HandSlot& h, bool deformed);
+  bool near_any_body(const Vec3& lo, const Vec3& hi) const;
+  void skin_render_mesh(HandSlot& h);
+  // The hold path (contacts.cpp): whether the hand holds the pair's body still since its anchor, the witness
+  // pass of a still pair, and the full contacts of a lazy pair made when read (every lazy pair of the hand,
+  // then its deformation).
+  bool holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const;
+  bool hold_by_witness(uint32_t hand, uint32_t body, HandBodyPair& pair, double dt);
+  void complete_contacts(uint32_t hand);
+  void complete_all_contacts();
+  // One hand's deformation from its contacts of the frame (deformation.cpp); the number of particles displaced.
+  int deform_hand(uint32_t hand);
+};
+
+// The particle index ranges of `h` whose group box, grown by `reach`, overlaps a body's world box (contacts.cpp).
+void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
+                          std::vector<std::pair<int, int>>& ranges);
 
 // The world: its model and state, the slot tables (each slot both halves, world_impl.h above), Bullet (a
 // service that keeps its own copy, "The core owns the state" in docs/design.md), the step's output, and what
@@ -274,15 +327,11 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
-  // Lazy particles (skinning.cpp): skin now / on read, and the coarse test that decides.
-  void skin_particles(HandSlot& h);
-  int skin_particles_in_reach(HandSlot& h);
-  void skin_witnesses(HandSlot& h);
-  std::vector<double> near_boxes;  // scratch of skin_particles_in_reach
-  std::vector<uint32_t> near_bodies;  // scratch of the broadphase queries
-  void refresh_particles(HandSlot& h, bool deformed);
-  bool near_any_body(const Vec3& lo, const Vec3& hi) const;
-  void skin_render_mesh(HandSlot& h);
+  // The hands' particles, skinned, collided and deformed lazily (HandParticles above).
+  ParticleScratch particle_scratch;
+  // The hold path (contacts.cpp). Off: every held pair takes the full pass (tests compare the two).
+  bool hold_path = true;
+  HandParticles particles() { return {def, bodies, *this, hands, pairs, particle_scratch, hold_path}; }
 
   // Grasp bookkeeping (grasp.cpp); set_motion in world.cpp.
   void begin_grasp(uint32_t hand, uint32_t body);
@@ -296,8 +345,8 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   void set_motion(Body& b, BodyMotion motion);
 
   // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Members
-  // still: pose_hands skinning.cpp, detect_contacts contacts.cpp, deform_hands deformation.cpp, decide_grasps
-  // grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
+  // still: pose_hands skinning.cpp, detect_contacts contacts.cpp, decide_grasps grasp.cpp, fit_touched_bodies
+  // pose_fit.cpp; the others are free functions (below World::Impl). Each returns
   // why it ran or had nothing to do.
   // This step's frame of each hand slot, indexed like `hands` (null: no frame, the hand is untracked).
   using SlotFrames = std::vector<const HandFrame*>;
@@ -305,24 +354,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   StageReport pose_hands(const SlotFrames& frames, double dt);
   StageReport detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
-  void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
-                            std::vector<std::pair<int, int>>& ranges) const;
-  StageReport deform_hands();
-  int deform_hand(uint32_t hand);
-  // The hold path (contacts.cpp): whether the hand holds the pair's body still since its anchor, the witness
-  // pass of a still pair, and the full contacts of a lazy pair made when read (every lazy pair of the hand,
-  // then its deformation). `hold_path` off: every held pair takes the full pass (tests compare the two).
-  bool hold_path = true;
-  bool holds_still(const HandSlot& h, const Body& b, const HandBodyPair& pair) const;
-  bool hold_by_witness(uint32_t hand, uint32_t body, HandBodyPair& pair, double dt);
-  void complete_contacts(uint32_t hand);
-  void complete_all_contacts();
-  std::vector<EntryFace> scratch_faces;          // hold_by_witness, complete_contacts
-  std::vector<ParticleContact> scratch_complete;  // complete_contacts
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
-  std::vector<ParticleContact> scratch_contacts;       // detect_contacts, then deform_hands
-  std::vector<std::pair<int, int>> scratch_ranges;     // detect_contacts
-  std::vector<std::pair<int, int>> scratch_inside;     // deform_hands (displace_particles)
   std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
   std::vector<SkinContact> scratch_pressed;            // fit_touched_bodies: contacts within the skin
   std::vector<SkinContact> scratch_overlap;            // fit_touched_bodies: the bone's overlap (PushModel::Physical)
@@ -428,6 +460,10 @@ StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t
 // its pose in that hand's palm frame, so the secondary hand slips along the body instead of dragging it.
 StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                                    const std::vector<HandSlot>& hands);
+
+// Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
+// held pair's with its witnesses only until complete_contacts redoes it).
+StageReport deform_hands(HandParticles& particles);
 
 // What a stage returns: its work, or why it had none.
 inline StageReport stage_work(int work, int particles = 0) {

@@ -488,7 +488,7 @@ uint64_t World::Impl::state_hash() const {
 }
 
 std::vector<uint8_t> World::Impl::save_state() {
-  complete_all_contacts();  // the saved contacts and deformation are whole, so a restored world reads them back
+  particles().complete_all_contacts();  // the saved contacts and deformation are whole, so a restored world reads them back
   const BackendState backend = backend_state_of(*this);
   Writer payload;
   visit_world(std::as_const(*this), backend, payload);

@@ -25,6 +25,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   for (Joint& j : w.joints) j.clear_solve();  // JointState's solve fields are this step's only
   const uint64_t nonfinite_before = w.nonfinite_recoveries;
   w.refresh_moving_boxes();
+  HandParticles particles = w.particles();
   auto stage = [&w](Stage s, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
     StageReport r = run();
@@ -34,7 +35,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   };
   stage(Stage::Skinning, [&] { return w.pose_hands(frames, dt); });        // lines 1-2: eq. 1, particle positions
   stage(Stage::Contacts, [&] { return w.detect_contacts(dt); });           // line 3
-  stage(Stage::Deformation, [&] { return w.deform_hands(); });             // particles pushed back to the surface
+  stage(Stage::Deformation, [&] { return deform_hands(particles); });      // particles pushed back to the surface
   stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
   stage(Stage::Attach, [&] {                                                // lines 10, 14
     return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
