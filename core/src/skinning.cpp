@@ -349,10 +349,13 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 }  // namespace
 
 // --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
-StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
+StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report,
+                       double dt) {
+  const WorldDef& def = particles.def;
+  const std::vector<Body>& bodies = particles.bodies;
+  std::vector<HandSlot>& hands = particles.hands;
   int tracked = 0, skinned = 0, in_reach = 0;
-  HandParticles particles = this->particles();
-  for (auto& entry : pairs) entry.second.still = false;  // set below for the hands near a body
+  for (auto& entry : particles.pairs) entry.second.still = false;  // set below for the hands near a body
   for (uint32_t i = 0; i < hands.size(); ++i) {
     HandSlot& h = hands[i];
     if (!h.alive) continue;
@@ -380,9 +383,9 @@ StageReport World::Impl::pose_hands(const SlotFrames& frames, double dt) {
       // The hold path: a pair whose hand holds its body as it held it at the anchor skins only its witness
       // pair (skin_particles_in_reach leaves the body out).
       bool still = false;
-      for (auto it = pairs.lower_bound({i, 0}); it != pairs.end() && it->first.first == i; ++it) {
+      for (auto it = particles.pairs.lower_bound({i, 0}); it != particles.pairs.end() && it->first.first == i; ++it) {
         HandBodyPair& pair = it->second;
-        pair.still = hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
+        pair.still = particles.hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
                      particles.holds_still(h, bodies[it->first.second], pair);
         still = still || pair.still;
       }

@@ -21,7 +21,7 @@ void World::Impl::validate_hand_frame(const HandFrame& frame, const HandSlot& h,
   if (frame.handedness != h.def.handedness) validate::fail(argument + ".handedness", "does not match the hand it drives");
 }
 
-World::Impl::SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
+SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
   validate_dt(dt);
   SlotFrames frames(hands.size(), nullptr);
   for (size_t k = 0; k < inputs.size(); ++k) {
@@ -41,7 +41,7 @@ World::Impl::SlotFrames World::Impl::frames_by_id(double dt, const std::vector<H
   return frames;
 }
 
-World::Impl::SlotFrames World::Impl::frames_by_position(double dt, const std::vector<HandFrame>& list) const {
+SlotFrames World::Impl::frames_by_position(double dt, const std::vector<HandFrame>& list) const {
   validate_dt(dt);
   size_t live = 0;
   for (const HandSlot& h : hands) live += h.alive;

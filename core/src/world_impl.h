@@ -238,6 +238,9 @@ struct StaticStopScratch {
   std::vector<uint32_t> near;
 };
 
+// This step's frame of each hand slot, indexed like the hands (null: no frame, the hand is untracked).
+using SlotFrames = std::vector<const HandFrame*>;
+
 // Scratch of the particle passes (skinning, contacts, deformation), kept so that a step allocates nothing once the
 // buffers have grown. Each pass clears what it uses first.
 struct ParticleScratch {
@@ -345,13 +348,9 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   void set_motion(Body& b, BodyMotion motion);
 
   // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Members
-  // still: pose_hands skinning.cpp, detect_contacts contacts.cpp, decide_grasps grasp.cpp, fit_touched_bodies
-  // pose_fit.cpp; the others are free functions (below World::Impl). Each returns
+  // still: detect_contacts contacts.cpp, decide_grasps grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
   // why it ran or had nothing to do.
-  // This step's frame of each hand slot, indexed like `hands` (null: no frame, the hand is untracked).
-  using SlotFrames = std::vector<const HandFrame*>;
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
-  StageReport pose_hands(const SlotFrames& frames, double dt);
   StageReport detect_contacts(double dt);
   void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
@@ -461,6 +460,12 @@ StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t
 StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                                    const std::vector<HandSlot>& hands);
 
+// Lines 1-2 (skinning.cpp): each tracked hand's bones from its frame (`frames`, indexed like the hands; null:
+// untracked), its particles skinned (eq. 1) where they can touch a body (the paper: all), the still held pairs
+// marked for the hold path, and the palm histories pushed at the frame's end time (`time` + dt). A palm that moved
+// faster than the speed cap raises HandTeleported in `report`.
+StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report,
+                       double dt);
 // Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
 // held pair's with its witnesses only until complete_contacts redoes it).
 StageReport deform_hands(HandParticles& particles);
