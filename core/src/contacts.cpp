@@ -472,19 +472,28 @@ void HandParticles::complete_all_contacts() {
     if (hands[hi].alive) complete_contacts(hi);
 }
 
+namespace {
+void collide_bullet_particles(HandParticles& particles, uint64_t body_version, uint32_t hi,
+                              std::vector<std::vector<ParticleContact>>& per_body);
+}  // namespace
+
 // --- line 3: detect hand collision and contact particles ---
-StageReport World::Impl::detect_contacts(double dt) {
+StageReport detect_contacts(HandParticles& particles, uint64_t body_version, double dt) {
+  const WorldDef& def = particles.def;
+  const std::vector<Body>& bodies = particles.bodies;
+  const std::vector<double>& body_boxes = particles.boxes.body_boxes;
+  std::vector<HandSlot>& hands = particles.hands;
+  HandBodyPairs& pairs = particles.pairs;
   for (auto& entry : pairs) {
     entry.second.contacts.clear();
     entry.second.previous_faces.swap(entry.second.entry_faces);
     entry.second.entry_faces.clear();
     entry.second.lazy = false;
   }
-  HandParticles particles = this->particles();
-  std::vector<uint32_t>& near_bodies = particle_scratch.near_bodies;
-  std::vector<ParticleContact>& found = particle_scratch.contacts;  // swapped into the pairs: buffers are reused
+  std::vector<uint32_t>& near_bodies = particles.scratch.near_bodies;
+  std::vector<ParticleContact>& found = particles.scratch.contacts;  // swapped into the pairs: buffers are reused
   std::vector<std::vector<ParticleContact>> per_body;  // BulletObjects: all bodies of one hand at once
-  std::vector<std::pair<int, int>>& ranges = particle_scratch.ranges;
+  std::vector<std::pair<int, int>>& ranges = particles.scratch.ranges;
   const bool bullet = def.particle_contacts == WorldDef::ParticleContacts::BulletObjects;
   int tested = 0, candidates = 0;
   for (uint32_t hi = 0; hi < hands.size(); ++hi) {
@@ -508,17 +517,17 @@ StageReport World::Impl::detect_contacts(double dt) {
     if (!bullet && !def.paper_pipeline && h.reach_groups_only && h.reach_groups.empty()) continue;
     const double radius = h.model->particle_radius;
     if (bullet || def.paper_pipeline) particles.refresh_particles(h, false);
-    if (bullet) collide_bullet_particles(hi, per_body);
+    if (bullet) collide_bullet_particles(particles, body_version, hi, per_body);
     // The broadphase (the widest margin); the paper pipeline tests every body.
     if (def.paper_pipeline) {
       near_bodies.clear();
       for (uint32_t bi = 0; bi < bodies.size(); ++bi) near_bodies.push_back(bi);
     } else {
-      bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
+      particles.boxes.bodies_near(h.state.bounds_lo, h.state.bounds_hi, def.grasp.release_distance, &near_bodies);
     }
     for (uint32_t bi : near_bodies) {
       const Vec3 lo = Eigen::Map<const Vec3>(&body_boxes[6 * bi]), hi_b = Eigen::Map<const Vec3>(&body_boxes[6 * bi + 3]);
-      Body& b = bodies[bi];
+      const Body& b = bodies[bi];
       if (!b.alive) continue;
       // A held object is no longer penetrated; count particles within release_distance as holding it.
       const bool held = b.held_by(hi);
@@ -559,7 +568,7 @@ StageReport World::Impl::detect_contacts(double dt) {
       it->second.contacts.swap(found);
       // A held pair's full pass is the anchor of the hold path's next steps.
       // (A copy: the bones are taken into the body's frame only when holds_still compares them.)
-      if (held && hold_path && !bullet && !def.paper_pipeline) {
+      if (held && particles.hold_path && !bullet && !def.paper_pipeline) {
         it->second.anchor.assign(h.state.bones.begin(), h.state.bones.end());
         it->second.anchor_pose = b.pose;
       } else {
@@ -595,8 +604,12 @@ void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, 
 
 // The paper's narrow phase: the hand's particles as Bullet sphere objects (radius + release margin) in a
 // collision world holding every body; rebuilt whenever bodies were added or removed.
-void World::Impl::collide_bullet_particles(uint32_t hi, std::vector<std::vector<ParticleContact>>& per_body) {
-  HandSlot& h = hands[hi];
+namespace {
+void collide_bullet_particles(HandParticles& particles, uint64_t body_version, uint32_t hi,
+                              std::vector<std::vector<ParticleContact>>& per_body) {
+  const WorldDef& def = particles.def;
+  const std::vector<Body>& bodies = particles.bodies;
+  HandSlot& h = particles.hands[hi];
   if (!h.bullet_particles || h.bullet_version != body_version) {
     h.bullet_particles = std::make_unique<BulletParticleCollider>(
         h.model->particle_count(), h.model->particle_radius + def.grasp.release_distance);
@@ -616,5 +629,7 @@ void World::Impl::collide_bullet_particles(uint32_t hi, std::vector<std::vector<
   for (size_t k = 0; k < h.bullet_bodies.size() && k < by_collider.size(); ++k)
     per_body[h.bullet_bodies[k]] = std::move(by_collider[k]);
 }
+
+}  // namespace
 
 }  // namespace handsim

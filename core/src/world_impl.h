@@ -348,11 +348,9 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   void set_motion(Body& b, BodyMotion motion);
 
   // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Members
-  // still: detect_contacts contacts.cpp, decide_grasps grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
+  // still: decide_grasps grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
   // why it ran or had nothing to do.
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
-  StageReport detect_contacts(double dt);
-  void collide_bullet_particles(uint32_t hand, std::vector<std::vector<ParticleContact>>& per_body);
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
   std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
   std::vector<SkinContact> scratch_pressed;            // fit_touched_bodies: contacts within the skin
@@ -466,6 +464,11 @@ StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vecto
 // faster than the speed cap raises HandTeleported in `report`.
 StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report,
                        double dt);
+// Line 3 (contacts.cpp): each tracked hand's particles against the bodies near it, into the pairs (a pair made for
+// a first contact; a held body's contacts within release_distance), with their entry faces; a still held pair
+// takes the witness pass (the hold path) and becomes lazy. The paper's narrow phase (BulletObjects) rebuilds a
+// hand's Bullet particles when `body_version` (WorldModel) moved on.
+StageReport detect_contacts(HandParticles& particles, uint64_t body_version, double dt);
 // Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
 // held pair's with its witnesses only until complete_contacts redoes it).
 StageReport deform_hands(HandParticles& particles);

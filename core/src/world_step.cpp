@@ -34,7 +34,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
     w.report.stages[size_t(s)] = r;
   };
   stage(Stage::Skinning, [&] { return pose_hands(particles, frames, w.time, w.report, dt); });  // lines 1-2: eq. 1
-  stage(Stage::Contacts, [&] { return w.detect_contacts(dt); });           // line 3
+  stage(Stage::Contacts, [&] { return detect_contacts(particles, w.body_version, dt); });  // line 3
   stage(Stage::Deformation, [&] { return deform_hands(particles); });      // particles pushed back to the surface
   stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
   stage(Stage::Attach, [&] {                                                // lines 10, 14
