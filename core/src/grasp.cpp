@@ -454,10 +454,12 @@ BodyVelocity stopped_velocity(BodyVelocity v, const Vec3& pushed) {
   v.linear -= std::min(0.0, v.linear.dot(out)) * out;
   return v;
 }
-}  // namespace
 
 // The span a hand must have closed by lately to begin a grasp; 0 (off) is met by any hand.
-double World::Impl::closing_needed() const { return def.grasp.closing_distance; }
+double closing_needed(const WorldDef& def) { return def.grasp.closing_distance; }
+
+using Intent = GraspScratch::Intent;
+bool witness_opposes(const HandBodyPair& pair, double cos);
 
 // Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
 // A grasp begins with two rigid parts (GraspSettings::across_parts), counting only contacts within pass_depth and,
@@ -466,15 +468,15 @@ double World::Impl::closing_needed() const { return def.grasp.closing_distance; 
 // one opposing pair, so the pair that kept it last frame is tried first: while thumb and finger still oppose
 // (nearly every frame of a hold), the answer is known after one dot product instead of a pass over every
 // contact, and it is the same answer (the full test is exact). `directions` and `parts` are scratch space.
-World::Impl::Intent World::Impl::hand_intent(HandBodyPair& pair, uint32_t hi, std::vector<Vec3>& directions,
-                                             std::vector<int>& parts) const {
+Intent hand_intent(const WorldDef& def, const std::vector<HandSlot>& hands, HandBodyPair& pair, uint32_t hi,
+                   std::vector<Vec3>& directions, std::vector<int>& parts) {
   const GraspSettings& g = def.grasp;
   const HandSlot& h = hands[hi];
   const bool begin = !pair.tracker.grasped();
   const bool across = g.across_parts && begin;
   const bool every_contact = !begin || (g.pass_depth <= 0 && g.squeeze_distance <= 0);  // no begin-only filter
   Intent out;
-  out.closing = h.grip.closed_by() >= closing_needed();
+  out.closing = h.grip.closed_by() >= closing_needed(def);
   if (!across && every_contact && witness_opposes(pair, g.cos_threshold)) {
     out.opposing = true;
     return out;
@@ -504,7 +506,7 @@ World::Impl::Intent World::Impl::hand_intent(HandBodyPair& pair, uint32_t hi, st
 }
 
 // Whether the two particles of the pair's last opposing pair both still touch and still oppose.
-bool World::Impl::witness_opposes(const HandBodyPair& pair, double cos) {
+bool witness_opposes(const HandBodyPair& pair, double cos) {
   if (pair.witness[0] < 0 || pair.witness[0] == pair.witness[1]) return false;
   auto find = [&](int particle) -> const ParticleContact* {  // contacts are sorted by particle
     auto it = std::lower_bound(pair.contacts.begin(), pair.contacts.end(), particle,
@@ -517,8 +519,8 @@ bool World::Impl::witness_opposes(const HandBodyPair& pair, double cos) {
 }
 
 // Eq. 3 across two hands touching one body: a contact of one opposes a contact of the other.
-bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
-                               std::vector<int>& parts) const {
+bool hands_oppose(const WorldDef& def, const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
+                  std::vector<int>& parts) {
   directions.clear();
   parts.clear();
   for (const ParticleContact& c : a.contacts) directions.push_back(c.normal), parts.push_back(0);
@@ -526,14 +528,22 @@ bool World::Impl::hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std
   return opposing_across_parts(directions, parts, def.grasp.cos_threshold);
 }
 
+}  // namespace
+
 // --- lines 4-9, 11-13, 16: per object, collect contacts by hand and decide grasps (eq. 3) ---
-StageReport World::Impl::decide_grasps(double dt) {
-  std::vector<Vec3>& directions = scratch_directions;
-  std::vector<int>& parts = scratch_parts;
-  std::vector<Intent>& alone = scratch_intents;  // per pair in map order: eq. 3 and closing of its hand by itself
+StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt) {
+  const WorldDef& def = grasps.def;
+  std::vector<Body>& bodies = grasps.bodies;
+  const std::vector<HandSlot>& hands = grasps.hands;
+  HandBodyPairs& pairs = grasps.pairs;
+  std::vector<Event>& events = grasps.events;
+  std::vector<Vec3>& directions = scratch.directions;
+  std::vector<int>& parts = scratch.parts;
+  std::vector<Intent>& alone = scratch.intents;  // per pair in map order: eq. 3 and closing of its hand by itself
   alone.clear();
   for (auto& [key, pair] : pairs) {
-    alone.push_back(bodies[key.second].manipulable() ? hand_intent(pair, key.first, directions, parts) : Intent{});
+    alone.push_back(bodies[key.second].manipulable() ? hand_intent(def, hands, pair, key.first, directions, parts)
+                                                     : Intent{});
     pair.opposing_alone = alone.back().opposing;
   }
   int decided = 0;
@@ -542,10 +552,10 @@ StageReport World::Impl::decide_grasps(double dt) {
     const uint32_t hi = it->first.first, bi = it->first.second;
     HandBodyPair& pair = it->second;
     Body& b = bodies[bi];
-    const HandId hand = hand_id(hi);
+    const HandId hand = grasps.hand_id(hi);
     const int count = int(pair.contacts.size());
-    if (count > 0 && pair.previous_count == 0) events.push_back({EventType::ContactBegin, hand, body_id(bi)});
-    if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, body_id(bi)});
+    if (count > 0 && pair.previous_count == 0) events.push_back({EventType::ContactBegin, hand, grasps.body_id(bi)});
+    if (count == 0 && pair.previous_count > 0) events.push_back({EventType::ContactEnd, hand, grasps.body_id(bi)});
     pair.previous_count = count;
     if (b.manipulable()) {
       const HandSlot& h = hands[hi];
@@ -559,22 +569,22 @@ StageReport World::Impl::decide_grasps(double dt) {
       // body too big for one hand: palms farther apart than the hand is long (hand_length). Two open palms
       // clapping on a 5 cm cube (Leap recording three-claps, Leap's grab and pinch 0) are no grip; one hand
       // grips a body that small.
-      if (!own.opposing && closing_needed() > 0)
+      if (!own.opposing && closing_needed(def) > 0)
         for (const auto& [other, other_pair] : pairs)
           if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
               hands[other.first].state.tracked && h.grip.palms_apart(hands[other.first].grip) > hand_length(*h.model) &&
-              hands_oppose(pair, other_pair, directions, parts)) {
+              hands_oppose(def, pair, other_pair, directions, parts)) {
             intent.opposing = true;
-            intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed();
+            intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed(def);
             if (intent.closing) break;
           }
       const GraspEvent e =
           pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
       if (e.type == GraspEventType::GraspEnd)
-        end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
+        grasps.end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);
       // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
-      if (pair.tracker.grasped() && !b.held_by(hi)) begin_grasp(hi, bi);
+      if (pair.tracker.grasped() && !b.held_by(hi)) grasps.begin_grasp(hi, bi);
       ++decided;
     }
     // Forget pairs with nothing going on, so the map holds only what touches or holds.
@@ -585,15 +595,15 @@ StageReport World::Impl::decide_grasps(double dt) {
   return stage_work(decided);
 }
 
-void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
+void Grasps::begin_grasp(uint32_t hi, uint32_t bi) {
   Body& b = bodies[bi];
   const HandSlot& h = hands[hi];
   if (!b.grasp.grasped) {
     b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
-    held.push_back(bi);
+    moving.held.push_back(bi);
     // A free body is attached to the hand. A joint's child is not: the hand only tells the joint where it
     // wants the child (hard: solve_joints; soft: a velocity drive against the Bullet constraint).
-    if (!b.jointed() && b.soft_joint < 0) set_motion(b, BodyMotion::Kinematic);
+    if (!b.jointed() && b.soft_joint < 0) set_motion(backend, moving, b, BodyMotion::Kinematic);
   } else if (b.grasp.primary.index != hi && b.grasp.secondary.is_null()) {
     b.grasp.secondary = hand_id(hi);
     b.secondary_relative = h.palm.inverse() * b.pose;
@@ -603,7 +613,7 @@ void World::Impl::begin_grasp(uint32_t hi, uint32_t bi) {
   events.push_back({EventType::GraspBegin, hand_id(hi), body_id(bi)});
 }
 
-void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
+void Grasps::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
   Body& b = bodies[bi];
   if (!b.held_by(hi)) return;
   if (b.grasp.primary.index != hi) {
@@ -619,7 +629,7 @@ void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool z
     // over starts from there too.
     const HandSlot& h = hands[hi];
     Vec3 pushed;
-    b.pose = held_pose(def, bodies, *this, hands, stop_scratch, b, &pushed);
+    b.pose = held_pose(def, bodies, boxes, hands, stop_scratch, b, &pushed);
     if (!b.grasp.secondary.is_null()) hand_over(b);
     else release(b, zero_velocity ? BodyVelocity{} : stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed));
   }
@@ -627,30 +637,30 @@ void World::Impl::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool z
 }
 
 // The secondary hand becomes primary, taking the body from where it is: no jump.
-void World::Impl::hand_over(Body& b) {
+void Grasps::hand_over(Body& b) {
   b.grasp.primary = b.grasp.secondary;
   b.grasp.secondary = HandId{};
   b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
 }
 
-void World::Impl::release(Body& b, const BodyVelocity& velocity) {
+void Grasps::release(Body& b, const BodyVelocity& velocity) {
   b.grasp = GraspInfo();
   b.just_released = true;
-  released.push_back(uint32_t(&b - bodies.data()));
+  moving.released.push_back(uint32_t(&b - bodies.data()));
   b.linear = capped_speed(velocity.linear);
   b.angular = capped_speed(velocity.angular);
-  set_motion(b, BodyMotion::Dynamic);
-  backend->write(b.backend, b.pose, b.linear, b.angular);
+  set_motion(backend, moving, b, BodyMotion::Dynamic);
+  backend.write(b.backend, b.pose, b.linear, b.angular);
 }
 
 // A held body moved by the caller stays held where it now is.
-void World::Impl::retake_relative_poses(Body& b) {
+void Grasps::retake_relative_poses(Body& b) {
   if (!b.grasp.grasped) return;
   b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
   if (!b.grasp.secondary.is_null()) b.secondary_relative = hands[b.grasp.secondary.index].palm.inverse() * b.pose;
 }
 
-void World::Impl::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
+void Grasps::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
   auto it = pairs.find({hi, bi});
   if (bodies[bi].held_by(hi)) end_grasp(hi, bi, reason, true);
   if (it != pairs.end() && it->second.previous_count > 0)

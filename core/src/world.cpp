@@ -129,7 +129,8 @@ void World::reset() {
   const auto held = lock();
   Impl& old = *impl_;
   // End every grasp and contact first, so a caller who follows events() sees each one close.
-  for (const auto& [key, pair] : old.pairs) old.end_pair(key.first, key.second, EventReason::BodyRemoved);
+  Grasps grasps = old.grasps();
+  for (const auto& [key, pair] : old.pairs) grasps.end_pair(key.first, key.second, EventReason::BodyRemoved);
   // They stay listed through the next step, as remove_body's do; the last step's own events stay until then too.
   std::vector<Event> events = std::move(old.events);
   const size_t step_events = old.step_events;
@@ -178,7 +179,7 @@ void World::remove_body(BodyId id) {
       ++it;
       continue;
     }
-    w.end_pair(it->first.first, id.index, EventReason::BodyRemoved);
+    w.grasps().end_pair(it->first.first, id.index, EventReason::BodyRemoved);
     it = w.pairs.erase(it);
   }
   w.backend->remove(b.backend);
@@ -298,7 +299,7 @@ void World::remove_hand(HandId id) {
       continue;
     }
     // A body it held alone falls at rest; one it shared stays with the other hand.
-    w.end_pair(id.index, it->first.second, EventReason::HandRemoved);
+    w.grasps().end_pair(id.index, it->first.second, EventReason::HandRemoved);
     it = w.pairs.erase(it);
   }
   release_slot(w.hands, w.free_hand_slots, id.index);
@@ -362,7 +363,7 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
                    Status::InvalidState);
   b.pose = b.synced_pose = p;
   // Without this the attach stage would put a held body straight back into the hand.
-  impl_->retake_relative_poses(b);
+  impl_->grasps().retake_relative_poses(b);
   impl_->backend->write(b.backend, p, b.linear, b.angular);
   impl_->update_box(impl_->bodies, id.index);
   if (!impl_->joint_order.empty()) place_children(*impl_, impl_->joints, impl_->bodies, *impl_->backend);
@@ -390,14 +391,14 @@ double World::time() const {
   return impl_->time;
 }
 
-void World::Impl::set_motion(Body& b, BodyMotion motion) {
+void set_motion(BulletBackend& backend, MovingBodies& moving, Body& b, BodyMotion motion) {
   if (b.motion == motion) return;
-  backend->set_motion(b.backend, motion, b.mass);
+  backend.set_motion(b.backend, motion, b.mass);
   b.motion = motion;
   b.read_asleep = false;
-  ++motion_version;
+  ++moving.motion_version;
   b.synced_pose = b.pose;
-  backend->write(b.backend, b.pose, b.linear, b.angular);
+  backend.write(b.backend, b.pose, b.linear, b.angular);
 }
 
 }  // namespace handsim

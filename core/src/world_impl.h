@@ -292,10 +292,61 @@ struct HandParticles {
 void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, const Vec3& body_hi,
                           std::vector<std::pair<int, int>>& ranges);
 
+// What moves (world_activity.cpp; the body boxes are BodyBoxes): the lists the per-step passes walk instead of every
+// body, so settled and static bodies cost nothing.
+struct MovingBodies {
+  std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
+  std::vector<uint32_t> released;  // bodies whose just_released is set
+  std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
+  uint64_t motion_version = 1, dynamic_version = 0;
+};
+
+// A body's motion now (world.cpp): Bullet's copy follows, and the dynamic list is rebuilt (motion_version).
+void set_motion(BulletBackend& backend, MovingBodies& moving, Body& b, BodyMotion motion);
+
+// Scratch of decide_grasps (grasp.cpp), kept so that a step allocates nothing once it has grown.
+struct GraspScratch {
+  struct Intent {
+    bool opposing = false;  // eq. 3 (across parts when a grasp would begin)
+    bool closing = false;   // the hand closed by closing_distance within closing_window_s
+  };
+  std::vector<Vec3> directions;
+  std::vector<int> parts;
+  std::vector<Intent> intents;  // per pair in map order: eq. 3 and closing of its hand by itself
+};
+
+// The grasp bookkeeping (grasp.cpp): a grasp begins (the body attached to its hand, or a second hand joining), ends
+// (the body released with its hand's velocity, or handed over to the second hand), a pair ends with its
+// hand or body removed; each raises its event. Used by decide_grasps and by World's removals and set_body_pose.
+// Reads the def, the hands and the body boxes; writes the bodies, the pairs, Bullet's copy, the moving lists,
+// the static stops' scratch and the events. A view over World::Impl's tables (World::Impl::grasps()).
+struct Grasps {
+  const WorldDef& def;
+  std::vector<Body>& bodies;
+  const std::vector<HandSlot>& hands;
+  const BodyBoxes& boxes;
+  HandBodyPairs& pairs;
+  BulletBackend& backend;
+  MovingBodies& moving;
+  StaticStopScratch& stop_scratch;  // held_pose's, in end_grasp
+  std::vector<Event>& events;
+
+  BodyId body_id(uint32_t index) const { return {index, bodies[index].generation}; }
+  HandId hand_id(uint32_t index) const { return {index, hands[index].generation}; }
+  void begin_grasp(uint32_t hand, uint32_t body);
+  void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
+  void hand_over(Body& b);
+  void release(Body& b, const BodyVelocity& velocity);
+  void retake_relative_poses(Body& b);
+  // Ends what a (hand, body) pair has going on before one of them is removed: GraspEnd with `reason` when
+  // the hand holds the body, ContactEnd when it touched it. The caller erases the pair.
+  void end_pair(uint32_t hand, uint32_t body, EventReason reason);
+};
+
 // The world: its model and state, the slot tables (each slot both halves, world_impl.h above), Bullet (a
 // service that keeps its own copy, "The core owns the state" in docs/design.md), the step's output, and what
 // is derived from the state to make a step cheap (world_activity.cpp) or is scratch.
-struct World::Impl : WorldModel, WorldState, BodyBoxes {
+struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   std::unique_ptr<BulletBackend> backend;
   std::vector<Body> bodies;
   std::vector<Joint> joints;
@@ -305,12 +356,6 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   // that removals raised after it, so a caller who reads events() after each step sees those too.
   size_t step_events = 0;
   StepReport report;  // of the last step (last_step)
-  // What moves (world_activity.cpp; the body boxes are BodyBoxes): the lists the per-step passes walk instead of
-  // every body, so settled and static bodies cost nothing.
-  std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
-  std::vector<uint32_t> released;  // bodies whose just_released is set
-  std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
-  uint64_t motion_version = 1, dynamic_version = 0;
 
   explicit Impl(const WorldDef& d);
 
@@ -336,19 +381,12 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   bool hold_path = true;
   HandParticles particles() { return {def, bodies, *this, hands, pairs, particle_scratch, hold_path}; }
 
-  // Grasp bookkeeping (grasp.cpp); set_motion in world.cpp.
-  void begin_grasp(uint32_t hand, uint32_t body);
-  void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
-  void hand_over(Body& b);
-  void release(Body& b, const BodyVelocity& velocity);
-  void retake_relative_poses(Body& b);
-  // Ends what a (hand, body) pair has going on before one of them is removed: GraspEnd with `reason` when
-  // the hand holds the body, ContactEnd when it touched it. The caller erases the pair.
-  void end_pair(uint32_t hand, uint32_t body, EventReason reason);
-  void set_motion(Body& b, BodyMotion motion);
+  // The grasp bookkeeping (Grasps above).
+  StaticStopScratch stop_scratch;  // held_pose's, in follow_primary_hands and end_grasp
+  Grasps grasps() { return {def, bodies, hands, *this, pairs, *backend, *this, stop_scratch, events}; }
 
-  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Members
-  // still: decide_grasps grasp.cpp, fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
+  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Member
+  // still: fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
   // why it ran or had nothing to do.
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
   // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
@@ -357,21 +395,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes {
   std::vector<SkinContact> scratch_overlap;            // fit_touched_bodies: the bone's overlap (PushModel::Physical)
   std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
   std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
-  StageReport decide_grasps(double dt);
-  struct Intent {
-    bool opposing = false;  // eq. 3 (across parts when a grasp would begin)
-    bool closing = false;   // the hand closed by closing_distance within closing_window_s
-  };
-  Intent hand_intent(HandBodyPair& pair, uint32_t hand, std::vector<Vec3>& directions,
-                     std::vector<int>& parts) const;
-  static bool witness_opposes(const HandBodyPair& pair, double cos);
-  std::vector<Vec3> scratch_directions;  // scratch of decide_grasps
-  std::vector<int> scratch_parts;
-  std::vector<Intent> scratch_intents;
-  bool hands_oppose(const HandBodyPair& a, const HandBodyPair& b, std::vector<Vec3>& directions,
-                    std::vector<int>& parts) const;
-  double closing_needed() const;
-  StaticStopScratch stop_scratch;  // held_pose's, in follow_primary_hands and end_grasp
+  GraspScratch grasp_scratch;  // decide_grasps
   StageReport fit_touched_bodies(double dt);
   SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const;
   InverseInertia inverse_inertia(const Body& b) const;
@@ -469,6 +493,10 @@ StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, doubl
 // takes the witness pass (the hold path) and becomes lazy. The paper's narrow phase (BulletObjects) rebuilds a
 // hand's Bullet particles when `body_version` (WorldModel) moved on.
 StageReport detect_contacts(HandParticles& particles, uint64_t body_version, double dt);
+// Lines 4-9, 11-13, 16 (grasp.cpp): per pair, the contact events, then eq. 3 (with the closing rule, and across two
+// hands on one body) fed to the pair's tracker, whose decisions begin and end grasps (Grasps); pairs with nothing
+// going on are forgotten.
+StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt);
 // Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
 // held pair's with its witnesses only until complete_contacts redoes it).
 StageReport deform_hands(HandParticles& particles);

@@ -202,7 +202,7 @@ JointId World::Impl::add_joint(Joint j, BodyId parent_id, BodyId child_id, const
   const int parent_backend = j.parent == kWorldParent ? -1 : bodies[j.parent].backend;
   if (j.model == JointModel::Hard) {
     c.hard_joint = int(index);
-    if (!c.grasp.grasped) set_motion(c, BodyMotion::Kinematic);
+    if (!c.grasp.grasped) set_motion(*backend, *this, c, BodyMotion::Kinematic);
     if (parent_backend >= 0) backend->set_collision(parent_backend, c.backend, false);
     joints[index] = std::move(j);
     rebuild_joint_order();
@@ -491,7 +491,7 @@ void World::remove_joint(JointId id) {
     if (j.parent != kWorldParent) w.backend->set_collision(w.bodies[j.parent].backend, c.backend, true);
     // The child flies on with the velocity the joint gave it (place_children keeps it current).
     if (!c.grasp.grasped) {
-      w.set_motion(c, BodyMotion::Dynamic);
+      set_motion(*w.backend, w, c, BodyMotion::Dynamic);
       w.backend->write(c.backend, c.pose, c.linear, c.angular);
     }
   } else {

@@ -26,6 +26,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   const uint64_t nonfinite_before = w.nonfinite_recoveries;
   w.refresh_moving_boxes();
   HandParticles particles = w.particles();
+  Grasps grasps = w.grasps();
   auto stage = [&w](Stage s, auto&& run) {
     const auto t0 = std::chrono::steady_clock::now();
     StageReport r = run();
@@ -36,7 +37,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Skinning, [&] { return pose_hands(particles, frames, w.time, w.report, dt); });  // lines 1-2: eq. 1
   stage(Stage::Contacts, [&] { return detect_contacts(particles, w.body_version, dt); });  // line 3
   stage(Stage::Deformation, [&] { return deform_hands(particles); });      // particles pushed back to the surface
-  stage(Stage::Grasp, [&] { return w.decide_grasps(dt); });                // lines 4-9, 11-13, 16: eq. 3
+  stage(Stage::Grasp, [&] { return decide_grasps(grasps, w.grasp_scratch, dt); });  // lines 4-9, 11-13, 16: eq. 3
   stage(Stage::Attach, [&] {                                                // lines 10, 14
     return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
   });
