@@ -205,7 +205,9 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
 // beyond it (the bone takes the rest; without a skin, skin_depth = 0, the pulp is fully compressed at once), over
 // the skin area the particle stands for (hexagonal spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
 // `friction`: the pulp's Coulomb coefficient along the surface (0: it only presses).
-SkinContact World::Impl::skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const {
+namespace {
+
+SkinContact skin_contact(const WorldDef& def, const ParticleContact& c, const HandSlot& hand, double dt, double friction) {
   const double spacing = hand.model->particle_spacing;
   const double area = std::sqrt(3.0) / 2 * spacing * spacing;
   const double compressed = def.skin_depth > 0 ? std::min(1.0, c.depth / def.skin_depth) : 1.0;
@@ -219,7 +221,7 @@ SkinContact World::Impl::skin_contact(const ParticleContact& c, const HandSlot& 
 }
 
 // The body's inverse mass and inertia in the world frame (unit_inertia: principal moments per kg, body frame).
-InverseInertia World::Impl::inverse_inertia(const Body& b) const {
+InverseInertia inverse_inertia(const Body& b) {
   InverseInertia inv;
   inv.centre = b.pose.position;
   if (!(b.mass > 0)) return inv;
@@ -230,8 +232,6 @@ InverseInertia World::Impl::inverse_inertia(const Body& b) const {
   inv.inverse_inertia = R * moments.asDiagonal() * R.transpose();
   return inv;
 }
-
-namespace {
 
 // `pose` moved for `t` seconds at a constant velocity (linear of its origin, angular about it).
 Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double t) {
@@ -246,13 +246,11 @@ Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double 
 // contacts are as often the dry sides and backs of the fingers as moist pads.
 constexpr double kPulpFriction = 0.5;
 
-}  // namespace
-
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame; `shift` (PushModel::Physical), when
 // given, first moves it by that rigid displacement (linear: of its centre, angular: its rotation vector) with no
 // velocity: the overlap removed, not turned into momentum.
-void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt,
-                                    const BodyVelocity* shift) {
+void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
+                       Body& b, const Vec3& linear, const Vec3& angular, double dt, const BodyVelocity* shift = nullptr) {
   const Pose from = shift ? advanced(b.pose, shift->linear, shift->angular, 1.0) : b.pose;
   if (b.jointed()) {
     Joint& j = joints[b.hard_joint];
@@ -267,8 +265,10 @@ void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& ang
   b.pose = from;
   b.linear = linear;
   b.angular = angular;
-  backend->write(b.backend, b.pose, b.linear, b.angular);
+  backend.write(b.backend, b.pose, b.linear, b.angular);
 }
+
+}  // namespace
 
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
 // The fitted motion is applied as a velocity over this frame rather than as a teleport: in free space both
@@ -282,27 +282,31 @@ void World::Impl::push_touched_body(Body& b, const Vec3& linear, const Vec3& ang
 // A hand that holds one part of a jointed object does not push the other parts: its fingers around the lid
 // also graze the base, and the base pushed by the hand that carries the lid hinged to it would be pushed by
 // itself (the experiments saw such a base thrown metres). The parts stay free for the other hand.
-StageReport World::Impl::fit_touched_bodies(double dt) {
-  std::vector<Vec3>& from = scratch_from;
-  std::vector<Vec3>& to = scratch_to;
-  std::vector<SkinContact>& pressed = scratch_pressed;
-  std::vector<SkinContact>& overlap = scratch_overlap;
+StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
+                               const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
+                               const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
+                               BulletBackend& backend, PoseFitScratch& scratch, double dt) {
+  const WorldDef& def = model.def;
+  std::vector<Vec3>& from = scratch.from;
+  std::vector<Vec3>& to = scratch.to;
+  std::vector<SkinContact>& pressed = scratch.pressed;
+  std::vector<SkinContact>& overlap = scratch.overlap;
   constexpr double kUnbounded = std::numeric_limits<double>::infinity();
-  std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch_held_groups;  // (hand, group root) of every held body
+  std::vector<std::pair<uint32_t, uint32_t>>& held_groups = scratch.held_groups;  // (hand, group root) of every held body
   held_groups.clear();
-  for (uint32_t bi : held_bodies()) {
+  for (uint32_t bi : held) {
     const Body& b = bodies[bi];  // an unjointed held body is its own group and is not fitted
-    held_groups.push_back({b.grasp.primary.index, group_root(bi)});
-    if (!b.grasp.secondary.is_null()) held_groups.push_back({b.grasp.secondary.index, group_root(bi)});
+    held_groups.push_back({b.grasp.primary.index, group_root(bodies, joints, bi)});
+    if (!b.grasp.secondary.is_null()) held_groups.push_back({b.grasp.secondary.index, group_root(bodies, joints, bi)});
   }
   auto holds_group_of = [&](uint32_t hand, uint32_t body) {
-    const std::pair<uint32_t, uint32_t> key{hand, group_root(body)};
+    const std::pair<uint32_t, uint32_t> key{hand, group_root(bodies, joints, body)};
     return std::find(held_groups.begin(), held_groups.end(), key) != held_groups.end();
   };
   int fitted = 0;
-  for (uint32_t k : joint_order) bodies[joints[k].child].supported = false;  // only joints' children are
+  for (uint32_t k : model.joint_order) bodies[joints[k].child].supported = false;  // only joints' children are
   // The touched bodies in slot order (the pairs are ordered by hand first), each with its pairs.
-  auto& touched = scratch_touched;
+  auto& touched = scratch.touched;
   touched.clear();
   for (const auto& entry : pairs)
     if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
@@ -333,13 +337,13 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
         if (c.depth <= 0) continue;
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below.
-          pressed.push_back(skin_contact(c, hand, dt, kPulpFriction));
+          pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction));
           if (c.depth > skin)
             overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
           continue;
         }
         if (c.depth <= skin) {
-          pressed.push_back(skin_contact(c, hand, dt, 0.0));
+          pressed.push_back(skin_contact(def, c, hand, dt, 0.0));
           continue;
         }
         from.push_back(c.point);
@@ -357,15 +361,15 @@ StageReport World::Impl::fit_touched_bodies(double dt) {
       const InverseInertia inverse = inverse_inertia(b);
       const BodyVelocity shift = skin_press(overlap, inverse, {});
       const BodyVelocity v = skin_press(pressed, inverse, {b.linear, b.angular});
-      push_touched_body(b, v.linear, v.angular, dt, overlap.empty() ? nullptr : &shift);
+      push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt, overlap.empty() ? nullptr : &shift);
     } else if (!from.empty()) {
       const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
-      push_touched_body(b, carried.linear / double(from.size()) + correction.linear,
+      push_touched_body(def, bodies, joints, backend, b, carried.linear / double(from.size()) + correction.linear,
                         carried.angular / double(from.size()) + correction.angular, dt);
     } else if (!pressed.empty()) {
       // Only pulp touches the body: it presses, and Bullet weighs the press against the body's support.
       const BodyVelocity v = skin_press(pressed, inverse_inertia(b), {b.linear, b.angular});
-      push_touched_body(b, v.linear, v.angular, dt);
+      push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt);
     } else {
       continue;
     }

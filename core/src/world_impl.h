@@ -304,6 +304,15 @@ struct MovingBodies {
 // A body's motion now (world.cpp): Bullet's copy follows, and the dynamic list is rebuilt (motion_version).
 void set_motion(BulletBackend& backend, MovingBodies& moving, Body& b, BodyMotion motion);
 
+// Scratch of fit_touched_bodies (pose_fit.cpp), kept so that a step allocates nothing once it has grown.
+struct PoseFitScratch {
+  std::vector<Vec3> from, to;
+  std::vector<SkinContact> pressed;  // contacts within the skin
+  std::vector<SkinContact> overlap;  // the bone's overlap (PushModel::Physical)
+  std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
+  std::vector<std::pair<uint32_t, const HandBodyPairs::value_type*>> touched;  // (body, pair) of every touching pair
+};
+
 // Scratch of decide_grasps (grasp.cpp), kept so that a step allocates nothing once it has grown.
 struct GraspScratch {
   struct Intent {
@@ -372,7 +381,6 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   // Joints (world_joints.cpp).
   JointId add_joint(Joint j, BodyId parent, BodyId child, const std::string& argument);
   void rebuild_joint_order();
-  uint32_t group_root(uint32_t body) const;  // the body at the top of its joint chain (itself if unjointed)
 
   HandId add_hand(const HandDef& def, std::shared_ptr<const HandModel> model);
   // The hands' particles, skinned, collided and deformed lazily (HandParticles above).
@@ -385,22 +393,11 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   StaticStopScratch stop_scratch;  // held_pose's, in follow_primary_hands and end_grasp
   Grasps grasps() { return {def, bodies, hands, *this, pairs, *backend, *this, stop_scratch, events}; }
 
-  // Stages of Algorithm 1, run by World::step (world_step.cpp), each defined in the file named after it. Member
-  // still: fit_touched_bodies pose_fit.cpp; the others are free functions (below World::Impl). Each returns
-  // why it ran or had nothing to do.
+  // Algorithm 1 (world_step.cpp): its stages are free functions (below World::Impl), each defined in the file
+  // named after it; each returns its work or why it had none.
   StepReport step(double dt, const SlotFrames& frames);  // Algorithm 1 (world_step.cpp)
-  // Scratch of the stages, kept so that a step allocates nothing once the buffers have grown.
-  std::vector<Vec3> scratch_from, scratch_to;          // fit_touched_bodies
-  std::vector<SkinContact> scratch_pressed;            // fit_touched_bodies: contacts within the skin
-  std::vector<SkinContact> scratch_overlap;            // fit_touched_bodies: the bone's overlap (PushModel::Physical)
-  std::vector<std::pair<uint32_t, uint32_t>> scratch_held_groups;
-  std::vector<std::pair<uint32_t, const std::pair<const std::pair<uint32_t, uint32_t>, HandBodyPair>*>> scratch_touched;
   GraspScratch grasp_scratch;  // decide_grasps
-  StageReport fit_touched_bodies(double dt);
-  SkinContact skin_contact(const ParticleContact& c, const HandSlot& hand, double dt, double friction) const;
-  InverseInertia inverse_inertia(const Body& b) const;
-  void push_touched_body(Body& b, const Vec3& linear, const Vec3& angular, double dt,
-                         const BodyVelocity* shift = nullptr);
+  PoseFitScratch pose_fit_scratch;  // fit_touched_bodies
 
   // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
@@ -426,7 +423,9 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
 // what the stage reads (const) and writes. A slot table is passed whole where the stage reads one half of a
 // slot and writes the other (a joint's frames and its coordinate).
 
-// Joints (world_joints.cpp). The pose of a joint's parent (the world origin for kWorldParent), and where the
+// Joints (world_joints.cpp). The body at the top of `body`'s joint chain (itself if unjointed).
+uint32_t group_root(const std::vector<Body>& bodies, const std::vector<Joint>& joints, uint32_t body);
+// The pose of a joint's parent (the world origin for kWorldParent), and where the
 // joint's coordinate puts its child now.
 Pose parent_pose(const std::vector<Body>& bodies, const Joint& j);
 Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j);
@@ -466,6 +465,15 @@ void read_dynamic_bodies(WorldState& state, std::vector<Body>& bodies, BulletBac
 StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Body>& bodies, std::vector<Joint>& joints,
                      const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
                      const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, StepReport& report, double dt);
+
+// Line 17 (pose_fit.cpp, eq. 2): each touched free body that no hand holds (nor a part of its joint group: `held`,
+// held_bodies()) moves out of the hands: by the fitted rigid motion (PushModel::Fitted) or the pulp's impulses and
+// the overlap's displacement (Physical), as a velocity for the frame written to Bullet, or along its joint
+// (project_push); the bodies released this step (`released`) are done with after it.
+StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
+                               const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
+                               const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
+                               BulletBackend& backend, PoseFitScratch& scratch, double dt);
 
 // A held body stopped by static geometry (static_stop.cpp): where `b` is this frame (palm * T_rel of its primary
 // hand pushed out of the ground and the static bodies; T_rel re-taken when the grip slips), with the push in

@@ -95,7 +95,7 @@ uint32_t group_parent(const std::vector<Body>& bodies, const std::vector<Joint>&
 }
 }  // namespace
 
-uint32_t World::Impl::group_root(uint32_t body) const {
+uint32_t group_root(const std::vector<Body>& bodies, const std::vector<Joint>& joints, uint32_t body) {
   for (uint32_t up = group_parent(bodies, joints, body); up != kWorldParent; up = group_parent(bodies, joints, body))
     body = up;
   return body;

@@ -41,7 +41,10 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Attach, [&] {                                                // lines 10, 14
     return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
   });
-  stage(Stage::PoseFit, [&] { return w.fit_touched_bodies(dt); });         // line 17: eq. 2
+  stage(Stage::PoseFit, [&] {                                               // line 17: eq. 2
+    return fit_touched_bodies(w, w.bodies, w.joints, w.hands, w.pairs, w.held_bodies(), w.released, *w.backend,
+                              w.pose_fit_scratch, dt);
+  });
   stage(Stage::Dynamics, [&] {                                              // line 18
     return simulate(w, w, w.bodies, w.joints, w.hands, *w.backend, w.held_bodies(), w.dynamic_bodies(), w, w.report, dt);
   });
