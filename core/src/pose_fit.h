@@ -101,7 +101,7 @@ struct InverseInertia {
 // its support can take (Bullet's contact solver then cancels it) instead of eq. 2's fitted rotation.
 // The same solve with unbounded impulses, no friction, a zero start and hand_velocity = -normal * overlap gives
 // the least rigid displacement (in the body's mass and inertia metric) that moves every contact out by its
-// overlap: the physical push removes the overlap with it (World::Impl::fit_touched_bodies).
+// overlap: the physical push removes the overlap with it (fit_touched_bodies, pose_fit.cpp).
 BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
                         int iterations = 8);
 

@@ -501,13 +501,13 @@ StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, doubl
 // takes the witness pass (the hold path) and becomes lazy. The paper's narrow phase (BulletObjects) rebuilds a
 // hand's Bullet particles when `body_version` (WorldModel) moved on.
 StageReport detect_contacts(HandParticles& particles, uint64_t body_version, double dt);
+// Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
+// held pair's with its witnesses only until complete_contacts redoes it).
+StageReport deform_hands(HandParticles& particles);
 // Lines 4-9, 11-13, 16 (grasp.cpp): per pair, the contact events, then eq. 3 (with the closing rule, and across two
 // hands on one body) fed to the pair's tracker, whose decisions begin and end grasps (Grasps); pairs with nothing
 // going on are forgotten.
 StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt);
-// Deformation (deformation.cpp): each tracked hand's particles inside a body move back to its surface (a still
-// held pair's with its witnesses only until complete_contacts redoes it).
-StageReport deform_hands(HandParticles& particles);
 
 // What a stage returns: its work, or why it had none.
 inline StageReport stage_work(int work, int particles = 0) {
