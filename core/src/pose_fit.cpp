@@ -156,11 +156,12 @@ BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_
 }
 
 BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
-                        int iterations) {
+                        int iterations, double tolerance) {
   BodyVelocity v = start;
   std::vector<double> pushed(contacts.size(), 0.0);  // impulse each contact has passed so far (N s)
   std::vector<Vec3> dragged(contacts.size(), Vec3::Zero());  // and along the surface, by friction
   for (int sweep = 0; sweep < iterations; ++sweep) {
+    double changed = 0;  // the largest change of the body's speed at a contact this sweep (m/s)
     for (size_t i = 0; i < contacts.size(); ++i) {
       const SkinContact& c = contacts[i];
       const Vec3 r = c.point - body.centre;
@@ -174,6 +175,7 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
       pushed[i] = total;
       v.linear += body.inverse_mass * impulse * in;
       v.angular += impulse * arm;
+      changed = std::max(changed, std::abs(impulse) * response);
       if (!(c.friction > 0)) continue;
       // Friction: the impulse along the surface that brings the point's sliding to the hand's, its sum over the
       // sweeps kept within the cone |dragged| <= friction * pushed (Coulomb).
@@ -192,7 +194,9 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
       dragged[i] = total_drag;
       v.linear += body.inverse_mass * drag;
       v.angular += body.inverse_inertia * r.cross(drag);
+      changed = std::max(changed, (body.inverse_mass * drag + (body.inverse_inertia * r.cross(drag)).cross(r)).norm());
     }
+    if (changed <= tolerance) break;
   }
   return v;
 }
@@ -245,6 +249,13 @@ Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double 
 // (reviewed by Derler & Gerhardt, Tribology Letters 45, 2012); 0.5, the dry end, because a hand's grazing
 // contacts are as often the dry sides and backs of the fingers as moist pads.
 constexpr double kPulpFriction = 0.5;
+// A body resting on static geometry under a press (physical_push): the support's contacts bear loads with no bound,
+// so the load passes between the hand's contacts and the support's over many sweeps, and a solve stopped early
+// leaves the press's sideways parts (a palm's particles on a box's edges push down and out, in pairs that cancel
+// only once solved) as a slide or a turn. So it sweeps until no contact changes the body's speed at it by more than
+// 0.1 mm/s (2 micrometres of motion in a 60 Hz frame, far below a tracker's millimetre), at most 256 sweeps.
+constexpr int kSupportSweeps = 256;
+constexpr double kSupportSettled = 1e-4;
 
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame; `shift` (PushModel::Physical), when
 // given, first moves it by that rigid displacement (linear: of its centre, angular: its rotation vector) with no
@@ -268,6 +279,38 @@ void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vect
   backend.write(b.backend, b.pose, b.linear, b.angular);
 }
 
+// PushModel::Physical: the pulp's bounded impulses (`pressed`) set the velocity; the least displacement out of the
+// bone's overlap (`overlap`) moves a free body without any (docs/grasp.md "Push models"). A body resting on static
+// geometry (support_contacts) is held by its support instead (docs/grasp.md "A resting body's support bears the
+// press"):
+// - the support joins the velocity solve as contacts that push and never pull, with no bound and the surfaces'
+//   friction, so what the hand presses into the support the support bears, as a table bears a palm pressing a plate
+//   onto it; only what would lift, slide or tip the body moves it. The solve starts from the body's velocity plus
+//   this frame's gravity, so the support also bears the weight: its friction holds the weight's share of the load,
+//   and a press tips the body about an edge of its footprint only when its moment beats the weight's. The result
+//   goes to Bullet as it is (Bullet's substeps add the gravity again and its contact with the support takes it
+//   back; a body the press lifts off loses that frame's g dt twice).
+// - no displacement: the bone's overlap is what the tracked hand, which nothing stops, passes into a body its
+//   support and friction hold against the pulp's bounded force; pushed out kinematically it went into the support
+//   and Bullet pushed it back into the hand every frame (the first touch's creep, a base shoved off its table).
+// Jointed children rest on their joint, not on static geometry: they are pushed as free bodies are.
+void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
+                   const BodyBoxes& boxes, PoseFitScratch& scratch, Body& b, double dt) {
+  std::vector<SkinContact>& pressed = scratch.pressed;
+  std::vector<SkinContact>& support = scratch.support;
+  const InverseInertia inverse = inverse_inertia(b);
+  support.clear();
+  if (!b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, support);
+  const bool displaced = support.empty() && !scratch.overlap.empty();
+  const BodyVelocity shift = displaced ? skin_press(scratch.overlap, inverse, {}) : BodyVelocity{};
+  const Vec3 weight = def.gravity * dt;
+  pressed.insert(pressed.end(), support.begin(), support.end());
+  const BodyVelocity v = support.empty() ? skin_press(pressed, inverse, {b.linear, b.angular})
+                                         : skin_press(pressed, inverse, {b.linear + weight, b.angular}, kSupportSweeps,
+                                                      kSupportSettled);
+  push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt, displaced ? &shift : nullptr);
+}
+
 }  // namespace
 
 // --- line 17: object-centred pose update of touched, ungrasped objects (eq. 2) ---
@@ -285,7 +328,7 @@ void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vect
 StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
                                const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
                                const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
-                               BulletBackend& backend, PoseFitScratch& scratch, double dt) {
+                               BulletBackend& backend, const BodyBoxes& boxes, PoseFitScratch& scratch, double dt) {
   const WorldDef& def = model.def;
   std::vector<Vec3>& from = scratch.from;
   std::vector<Vec3>& to = scratch.to;
@@ -356,12 +399,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     }
     if (physical) {
       if (pressed.empty()) continue;
-      // The pulp's bounded impulses set the velocity; the least displacement out of the bone's overlap moves the
-      // body without any (docs/grasp.md "Push models").
-      const InverseInertia inverse = inverse_inertia(b);
-      const BodyVelocity shift = skin_press(overlap, inverse, {});
-      const BodyVelocity v = skin_press(pressed, inverse, {b.linear, b.angular});
-      push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt, overlap.empty() ? nullptr : &shift);
+      physical_push(def, bodies, joints, backend, boxes, scratch, b, dt);
     } else if (!from.empty()) {
       const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
       push_touched_body(def, bodies, joints, backend, b, carried.linear / double(from.size()) + correction.linear,

@@ -102,7 +102,8 @@ struct InverseInertia {
 // The same solve with unbounded impulses, no friction, a zero start and hand_velocity = -normal * overlap gives
 // the least rigid displacement (in the body's mass and inertia metric) that moves every contact out by its
 // overlap: the physical push removes the overlap with it (fit_touched_bodies, pose_fit.cpp).
+// `tolerance` > 0 (m/s) stops the sweeps early once none changes the body's speed at a contact by more.
 BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseInertia& body, const BodyVelocity& start,
-                        int iterations = 8);
+                        int iterations = 8, double tolerance = 0);
 
 }  // namespace handsim

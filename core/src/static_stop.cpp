@@ -9,6 +9,7 @@
 #include "world_impl.h"
 
 #include <algorithm>
+#include <limits>
 
 namespace handsim {
 namespace {
@@ -23,6 +24,12 @@ constexpr double kStaticSlop = 0.0005;
 // own size cannot get out of all of them; it keeps the best compromise the passes reach.
 constexpr int kQueries = 3;
 constexpr int kPasses = 8;
+// How near a static surface a point of a body must be for the surface to bear it (support_contacts): 1 mm. Bullet
+// keeps a resting body a fraction of a millimetre in or out of its support (its contact solver corrects penetration
+// over substeps, and the collision margin rounds a box's corners), so a body at rest on a table lies well within it;
+// a body lifted clear by more than this is in the air. A point this near a surface but not on it only stops the
+// body from being pushed into the surface by that much, which the surface would do a millimetre later anyway.
+constexpr double kSupportGap = 0.001;
 
 // Points that stand for a shape, with the radius of their spheres: a box's corners, edge midpoints and face
 // centres (a table edge passing under the middle of a held box's face meets a face centre); a sphere's centre;
@@ -127,6 +134,40 @@ Vec3 static_push(const WorldDef& def, const std::vector<Body>& bodies, const Bod
 }
 
 }  // namespace
+
+// Where `b` rests on static geometry (the ground, bodies of mass 0): the points standing for its shape (as for the
+// stops above) that lie within kSupportGap of a static surface, each a contact the support pushes along its
+// surface normal, never pulls, with Bullet's combined Coulomb coefficient of the two surfaces (the product, as
+// btManifoldResult combines them). A point further than that is not borne by the surface.
+void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                      StaticStopScratch& scratch, const Body& b, std::vector<SkinContact>& out) {
+  out.clear();
+  Eigen::Matrix3Xd& points = scratch.points;
+  double radius = 0;
+  shape_points(b.prepared, b.pose, points, radius);
+  constexpr double kUnbounded = std::numeric_limits<double>::infinity();
+  // A support's contact as the press solver takes it: normal into the support (the solver pushes along -normal,
+  // out of it), a surface that does not move, no bound on what it bears.
+  auto put = [&](const Vec3& point, const Vec3& out_of_support, double friction) {
+    out.push_back({point, -out_of_support, Vec3::Zero(), kUnbounded, friction});
+  };
+  if (def.ground)
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      const double gap = points(1, i) - radius - def.ground_height;
+      if (gap < kSupportGap) put(points.col(i) - (radius + gap) * Vec3::UnitY(), Vec3::UnitY(), b.friction * def.ground_friction);
+    }
+  Vec3 lo, hi;
+  local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, b.pose, lo, hi);
+  boxes.bodies_near(lo, hi, kSupportGap, &scratch.near);
+  std::vector<ParticleContact>& contacts = scratch.contacts;
+  for (uint32_t si : scratch.near) {
+    const Body& s = bodies[si];
+    if (!s.alive || s.declared != BodyMotion::Static) continue;
+    contacts.clear();  // the body's points, grown by the gap, in the static body
+    collide_particles(points, radius + kSupportGap, s.prepared, s.pose, contacts);
+    for (const ParticleContact& c : contacts) put(c.point, c.normal, b.friction * s.friction);
+  }
+}
 
 // Where the held body `b` is this frame: palm * T_rel of its primary hand, stopped by static geometry. A hand more
 // than slip_distance past the stopped body has its grip slip along it: T_rel is re-taken.

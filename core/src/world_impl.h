@@ -309,6 +309,8 @@ struct PoseFitScratch {
   std::vector<Vec3> from, to;
   std::vector<SkinContact> pressed;  // contacts within the skin
   std::vector<SkinContact> overlap;  // the bone's overlap (PushModel::Physical)
+  std::vector<SkinContact> support;  // where a pushed body rests on static geometry (PushModel::Physical)
+  StaticStopScratch stop;            // support_contacts' query of the static geometry
   std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
   std::vector<std::pair<uint32_t, const HandBodyPairs::value_type*>> touched;  // (body, pair) of every touching pair
 };
@@ -468,18 +470,24 @@ StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Bod
 
 // Line 17 (pose_fit.cpp, eq. 2): each touched free body that no hand holds (nor a part of its joint group: `held`,
 // held_bodies()) moves out of the hands: by the fitted rigid motion (PushModel::Fitted) or the pulp's impulses and
-// the overlap's displacement (Physical), as a velocity for the frame written to Bullet, or along its joint
-// (project_push); the bodies released this step (`released`) are done with after it.
+// the overlap's displacement (Physical; a body resting on static geometry, found through `boxes`, is held by its
+// support instead), as a velocity for the frame written to Bullet, or along its joint (project_push); the bodies
+// released this step (`released`) are done with after it.
 StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
                                const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
                                const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
-                               BulletBackend& backend, PoseFitScratch& scratch, double dt);
+                               BulletBackend& backend, const BodyBoxes& boxes, PoseFitScratch& scratch, double dt);
 
 // A held body stopped by static geometry (static_stop.cpp): where `b` is this frame (palm * T_rel of its primary
 // hand pushed out of the ground and the static bodies; T_rel re-taken when the grip slips), with the push in
 // `pushed`. `b` is one of `bodies`, whose static ones it reads through the broadphase.
 Pose held_pose(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                const std::vector<HandSlot>& hands, StaticStopScratch& scratch, Body& b, Vec3* pushed = nullptr);
+// Where `b` rests on static geometry (within 1 mm of the ground or a body of mass 0): contacts for skin_press that
+// push the body out of the support and never pull, unbounded, hand_velocity zero (the support does not move), with
+// the two surfaces' combined friction (PushModel::Physical: the support bears the hand's press).
+void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                      StaticStopScratch& scratch, const Body& b, std::vector<SkinContact>& out);
 
 // Grasps (grasp.cpp). Lines 10, 14: each held free body (`held`: held_bodies()) goes where its primary hand holds
 // it (held_pose), with that point's velocity; joint children are left to their joint.

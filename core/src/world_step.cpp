@@ -42,7 +42,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
     return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
   });
   stage(Stage::PoseFit, [&] {                                               // line 17: eq. 2
-    return fit_touched_bodies(w, w.bodies, w.joints, w.hands, w.pairs, w.held_bodies(), w.released, *w.backend,
+    return fit_touched_bodies(w, w.bodies, w.joints, w.hands, w.pairs, w.held_bodies(), w.released, *w.backend, w,
                               w.pose_fit_scratch, dt);
   });
   stage(Stage::Dynamics, [&] {                                              // line 18
