@@ -238,6 +238,12 @@ struct StaticStopScratch {
   std::vector<uint32_t> near;
 };
 
+// The id of a table's slot `index`: the index with the slot's generation now.
+template <class IdT, class Slot>
+IdT slot_id(const std::vector<Slot>& slots, uint32_t index) {
+  return {index, slots[index].generation};
+}
+
 // This step's frame of each hand slot, indexed like the hands (null: no frame, the hand is untracked).
 using SlotFrames = std::vector<const HandFrame*>;
 
@@ -342,8 +348,8 @@ struct Grasps {
   StaticStopScratch& stop_scratch;  // held_pose's, in end_grasp
   std::vector<Event>& events;
 
-  BodyId body_id(uint32_t index) const { return {index, bodies[index].generation}; }
-  HandId hand_id(uint32_t index) const { return {index, hands[index].generation}; }
+  BodyId body_id(uint32_t index) const { return slot_id<BodyId>(bodies, index); }
+  HandId hand_id(uint32_t index) const { return slot_id<HandId>(hands, index); }
   void begin_grasp(uint32_t hand, uint32_t body);
   void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
   void hand_over(Body& b);
@@ -374,9 +380,9 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   const Body& body(BodyId id, const char* argument = "body") const;
   HandSlot& hand(HandId id, const char* argument = "hand");
   const HandSlot& hand(HandId id, const char* argument = "hand") const;
-  BodyId body_id(uint32_t index) const { return {index, bodies[index].generation}; }
-  HandId hand_id(uint32_t index) const { return {index, hands[index].generation}; }
-  JointId joint_id(uint32_t index) const { return {index, joints[index].generation}; }
+  BodyId body_id(uint32_t index) const { return slot_id<BodyId>(bodies, index); }
+  HandId hand_id(uint32_t index) const { return slot_id<HandId>(hands, index); }
+  JointId joint_id(uint32_t index) const { return slot_id<JointId>(joints, index); }
   Joint& joint(JointId id, const char* argument = "joint");
   const Joint& joint(JointId id, const char* argument = "joint") const;
 
