@@ -184,7 +184,9 @@ std::vector<HandInput> to_inputs(const py::dict& hands) {
       throw py::type_error("hands: key " + std::string(py::repr(key)) + " (" +
                            std::string(py::str(py::type::of(key).attr("__name__"))) + ") is not a HandId");
     const HandId id = key.cast<HandId>();
-    inputs.push_back({id, cast_arg<HandFrame>(frame, key_name(id))});
+    // The key's name only for the message: building it for every entry of every step cost more than the cast.
+    inputs.push_back({id, py::isinstance<HandFrame>(frame) ? frame.cast<HandFrame>()
+                                                           : cast_arg<HandFrame>(frame, key_name(id))});
   }
   return inputs;
 }

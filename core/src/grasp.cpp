@@ -346,8 +346,9 @@ HandMotionHistory::HandMotionHistory(int window) {
 }
 
 void HandMotionHistory::push(const Pose& palm, double time) {
-  Pose p = validate::pose(palm, "palm");
-  validate::finite(time, "time");
+  const Pose p = validate::is_pose(palm) ? Pose{palm.position, palm.orientation.normalized()}  // as pose() returns it
+                                         : validate::pose(palm, "palm");
+  if (!std::isfinite(time)) validate::finite(time, "time");
   if (count_ > 0 && !(time > sample(0).time))
     validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(sample(0).time));
   samples_[static_cast<size_t>(next_)] = {p, time};
@@ -356,9 +357,32 @@ void HandMotionHistory::push(const Pose& palm, double time) {
   refresh_velocities();
 }
 
+// Least-squares slopes over the samples, with times taken relative to the newest sample so long sessions
+// (t ~ 1e5 s) keep sub-microsecond spacing: sum (tau_k - mean) x_k / sum (tau_k - mean)^2, x_k relative to the
+// newest. Linear: x_k the palm positions. Angular: the rotation vectors r_k = log(q_k q_newest^-1); under a
+// constant world-frame angular velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is
+// w. One pass for both, once per push.
 void HandMotionHistory::refresh_velocities() {
-  linear_ = linear_slope();
-  angular_ = angular_slope();
+  if (!has_velocity()) {
+    linear_ = angular_ = Vec3::Zero();
+    return;
+  }
+  const Sample& newest = sample(0);
+  double sum = 0;
+  for (int k = 0; k < count_; ++k) sum += sample(k).time - newest.time;
+  const double mean = sum / count_;
+  const Quat newest_inv = newest.pose.orientation.conjugate();
+  double spread = 0;
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  for (int k = 0; k < count_; ++k) {
+    const Sample& s = sample(k);
+    const double tau = s.time - newest.time - mean;
+    spread += tau * tau;
+    linear += tau * (s.pose.position - newest.pose.position);
+    angular += tau * rotation_vector(Quat(s.pose.orientation * newest_inv));
+  }
+  linear_ = linear / spread;
+  angular_ = angular / spread;
 }
 
 void HandMotionHistory::clear() {
@@ -375,44 +399,6 @@ bool HandMotionHistory::in_time_order() const {
 const HandMotionHistory::Sample& HandMotionHistory::sample(int age) const {
   int w = window();
   return samples_[static_cast<size_t>(((next_ - 1 - age) % w + w) % w)];
-}
-
-// Times are taken relative to the newest sample so long sessions (t ~ 1e5 s) keep sub-microsecond spacing.
-double HandMotionHistory::mean_time_offset() const {
-  double sum = 0;
-  for (int k = 0; k < count_; ++k) sum += sample(k).time - sample(0).time;
-  return sum / count_;
-}
-
-double HandMotionHistory::time_spread() const {
-  double mean = mean_time_offset(), s = 0;
-  for (int k = 0; k < count_; ++k) {
-    double tau = sample(k).time - sample(0).time - mean;
-    s += tau * tau;
-  }
-  return s;
-}
-
-// Least-squares slope of x(t): sum (tau_k - mean) x_k / sum (tau_k - mean)^2, with x_k relative to the newest.
-Vec3 HandMotionHistory::linear_slope() const {
-  if (!has_velocity()) return Vec3::Zero();
-  double mean = mean_time_offset();
-  Vec3 num = Vec3::Zero();
-  for (int k = 0; k < count_; ++k)
-    num += (sample(k).time - sample(0).time - mean) * (sample(k).pose.position - sample(0).pose.position);
-  return num / time_spread();
-}
-
-// Same slope for the rotation vectors r_k = log(q_k q_newest^-1). Under a constant world-frame angular
-// velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is w.
-Vec3 HandMotionHistory::angular_slope() const {
-  if (!has_velocity()) return Vec3::Zero();
-  double mean = mean_time_offset();
-  Quat newest_inv = sample(0).pose.orientation.conjugate();
-  Vec3 num = Vec3::Zero();
-  for (int k = 0; k < count_; ++k)
-    num += (sample(k).time - sample(0).time - mean) * rotation_vector(Quat(sample(k).pose.orientation * newest_inv));
-  return num / time_spread();
 }
 
 Vec3 HandMotionHistory::point_velocity(const Vec3& world_point) const {

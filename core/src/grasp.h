@@ -280,11 +280,7 @@ class HandMotionHistory {
     double time = 0;
   };
   const Sample& sample(int age) const;  // 0 = newest
-  double mean_time_offset() const;      // mean of (t_i - t_newest)
-  double time_spread() const;           // sum of (t_i - mean)^2
-  Vec3 linear_slope() const;
-  Vec3 angular_slope() const;
-  void refresh_velocities();  // linear_, angular_ from the samples held
+  void refresh_velocities();  // linear_, angular_ from the samples held: both least-squares slopes
 
   std::vector<Sample> samples_;  // ring buffer
   int next_ = 0;

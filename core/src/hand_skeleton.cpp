@@ -218,18 +218,31 @@ HandPoseParams closing_grip(const HandPoseParams& grip, double t, double duratio
 // recording says (a fuzzed Leap document gives 0.25 m): a radius is a length like any other, up to 1e7 m.
 constexpr double kMaxJointRadius = validate::kMaxCoordinate;
 
+namespace {
+
+// The same conditions as validate_frame's named checks, without building their argument names: a good joint
+// (every joint of every step, normally) costs no allocation; a bad one falls through to the named checks.
+bool joint_is_good(const JointPose& jp) {
+  return jp.position.allFinite() && jp.orientation.coeffs().allFinite() &&
+         std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && jp.radius >= 0 &&
+         jp.radius <= kMaxJointRadius && jp.position.cwiseAbs().maxCoeff() <= validate::kMaxCoordinate;
+}
+
+}  // namespace
+
+bool frame_is_valid(const HandFrame& frame) {
+  if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right) return false;
+  for (const JointPose& jp : frame.joints)
+    if (jp.valid && !joint_is_good(jp)) return false;
+  return true;
+}
+
 void validate_frame(const HandFrame& frame, const std::string& argument) {
   if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right)
     validate::fail(argument + ".handedness", "must be Left or Right");
   for (int j = 0; j < kHandJointCount; ++j) {
     const JointPose& jp = frame.joints[j];
-    if (!jp.valid) continue;  // untracked joints may hold anything
-    // The same conditions as the checks below, without building their argument names: a good joint (every
-    // joint of every step, normally) costs no allocation; a bad one falls through to the named checks.
-    const bool good = jp.position.allFinite() && jp.orientation.coeffs().allFinite() &&
-                      std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && jp.radius >= 0 &&
-                      jp.radius <= kMaxJointRadius && jp.position.cwiseAbs().maxCoeff() <= validate::kMaxCoordinate;
-    if (good) continue;
+    if (!jp.valid || joint_is_good(jp)) continue;  // untracked joints may hold anything
     std::string name = argument + ".joints[" + std::to_string(j) + "]";
     validate::point(jp.position, name + ".position");
     validate::unit_quat(jp.orientation, name + ".orientation");

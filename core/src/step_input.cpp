@@ -25,18 +25,22 @@ SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& in
   validate_dt(dt);
   SlotFrames frames(hands.size(), nullptr);
   for (size_t k = 0; k < inputs.size(); ++k) {
-    const std::string argument = "hands[" + std::to_string(k) + "]";
+    // The entry's name is built only for a message: a good entry (every entry of every step, normally) costs
+    // no allocation.
+    auto argument = [k] { return "hands[" + std::to_string(k) + "]"; };
     const HandId id = inputs[k].hand;
-    hand(id, (argument + ".hand").c_str());  // null or not a live hand of this world: StaleId
+    if (!live_slot(hands, id)) hand(id, (argument() + ".hand").c_str());  // null or not live here: StaleId
     if (frames[id.index]) {
       size_t first = 0;
       while (inputs[first].hand != id) ++first;
-      validate::fail(argument + ".hand", "index " + std::to_string(id.index) + ", generation " +
-                                             std::to_string(id.generation) + " already has a frame, in hands[" +
-                                             std::to_string(first) + "]");
+      validate::fail(argument() + ".hand", "index " + std::to_string(id.index) + ", generation " +
+                                               std::to_string(id.generation) + " already has a frame, in hands[" +
+                                               std::to_string(first) + "]");
     }
-    validate_hand_frame(inputs[k].frame, hands[id.index], argument + ".frame");
-    frames[id.index] = &inputs[k].frame;
+    const HandFrame& frame = inputs[k].frame;
+    if (!frame_is_valid(frame) || frame.handedness != hands[id.index].def.handedness)
+      validate_hand_frame(frame, hands[id.index], argument() + ".frame");  // names what is wrong
+    frames[id.index] = &frame;
   }
   return frames;
 }
@@ -52,7 +56,8 @@ SlotFrames World::Impl::frames_by_position(double dt, const std::vector<HandFram
   size_t k = 0;
   for (uint32_t i = 0; i < hands.size() && k < list.size(); ++i) {
     if (!hands[i].alive) continue;
-    validate_hand_frame(list[k], hands[i], "hands[" + std::to_string(k) + "]");
+    if (!frame_is_valid(list[k]) || list[k].handedness != hands[i].def.handedness)
+      validate_hand_frame(list[k], hands[i], "hands[" + std::to_string(k) + "]");
     frames[i] = &list[k++];
   }
   return frames;

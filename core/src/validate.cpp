@@ -50,6 +50,11 @@ Pose pose(const Pose& p, const std::string& argument) {
   return {p.position, unit_quat(p.orientation, argument + ".orientation")};
 }
 
+bool is_pose(const Pose& p) {
+  return p.position.allFinite() && p.orientation.coeffs().allFinite() &&
+         !(std::abs(p.orientation.norm() - 1.0) > kQuatTolerance);
+}
+
 void point(const Vec3& v, const std::string& argument) {
   finite(v, argument);
   if (!(v.cwiseAbs().maxCoeff() <= kMaxCoordinate))

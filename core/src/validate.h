@@ -47,6 +47,9 @@ void positive(const Vec3& v, const std::string& argument);  // every component f
 // Returns the normalized quaternion, or throws when it is non-finite or too far from unit length.
 Quat unit_quat(const Quat& q, const std::string& argument);
 Pose pose(const Pose& p, const std::string& argument);
+// pose()'s conditions without an argument name: a per-step caller checks with it and calls pose(), which builds
+// the name for its message, only when it fails.
+bool is_pose(const Pose& p);
 Pose body_pose(const Pose& p, const std::string& argument);
 void point(const Vec3& v, const std::string& argument);  // finite, every |component| <= kMaxCoordinate
 // finite and lo <= v <= hi; the message gives the range and the unit ("m", "kg", "" for none).

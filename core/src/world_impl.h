@@ -539,6 +539,10 @@ inline StageReport stage_skipped(SkipReason why) {
 // A generation no other slot of any world in this process has had (world.cpp).
 uint32_t fresh_generation();
 
+// validate_frame's conditions without building argument names (hand_skeleton.cpp): the step checks every frame
+// with it and calls validate_frame, which names what is wrong, only when it fails.
+bool frame_is_valid(const HandFrame& frame);
+
 // Slot tables with generations, shared by bodies, joints and hands.
 inline std::string stale_message(uint32_t index, uint32_t generation) {
   return "names no live object (removed, or from another world): index " + std::to_string(index) +
@@ -546,11 +550,16 @@ inline std::string stale_message(uint32_t index, uint32_t generation) {
 }
 
 template <class Slot, class IdT>
+bool live_slot(const std::vector<Slot>& slots, IdT id) {
+  return !id.is_null() && id.index < slots.size() && slots[id.index].generation == id.generation &&
+         slots[id.index].alive;
+}
+
+template <class Slot, class IdT>
 Slot& checked_slot(std::vector<Slot>& slots, IdT id, const char* argument) {
+  if (live_slot(slots, id)) return slots[id.index];
   if (id.is_null()) validate::fail(argument, "is the null id", Status::StaleId);
-  if (id.index >= slots.size() || slots[id.index].generation != id.generation || !slots[id.index].alive)
-    validate::fail(argument, stale_message(id.index, id.generation), Status::StaleId);
-  return slots[id.index];
+  validate::fail(argument, stale_message(id.index, id.generation), Status::StaleId);
 }
 
 // Takes a free slot or appends one; returns its index.
