@@ -321,7 +321,8 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
     while (prev != previous.end() && prev->particle < c.particle) ++prev;
     const Vec3 x = centres.col(c.particle);
-    const Vec3 l = R.transpose() * (x - pose.position);
+    // The centre in body coordinates, for the particles that may have crossed the body only (as `relative`).
+    auto local = [&] { return Vec3(R.transpose() * (x - pose.position)); };
     const bool inside = c.depth > radius;  // the centre is behind the surface
     EntryFace face{c.particle, R.transpose() * c.normal, 0};
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
@@ -336,7 +337,7 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
     auto reach = [&] { return relative().norm() * kEntryFrames * dt + radius; };
     bool replaced = false;
     if (touched_before && (inside || (prev->crossing && prev->normal.dot(face.normal) < kOppositeFaces &&
-                                      radius - (prev->normal.dot(l) - prev->offset) <= prev->depth + reach()))) {
+                                      radius - (prev->normal.dot(local()) - prev->offset) <= prev->depth + reach()))) {
       // Inside, or leaving through the far side: a particle that was inside (or leaving) last frame and is now
       // nearest the face opposite the one it entered through, within its reach, has crossed the body, and
       // answering it with that face would push the body back the way the hand came (a hand driven past a
@@ -347,10 +348,11 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
     } else if (inside && hand.has_velocity()) {
       // A centre inside at its first contact crossed the surface within the last frame; two frames of slack
       // for the lag of the velocity estimate (a 4-sample slope).
-      replaced = entry_face(shape, l, R.transpose() * relative(), kEntryFrames * dt, face.normal, face.offset);
+      replaced = entry_face(shape, local(), R.transpose() * relative(), kEntryFrames * dt, face.normal, face.offset);
     }
     face.crossing = inside || replaced;
     if (replaced) {
+      const Vec3 l = local();
       const double distance = face.normal.dot(l) - face.offset;  // < 0 behind the face
       c.normal = R * face.normal;
       c.point = R * (l - distance * face.normal) + pose.position;
@@ -393,11 +395,16 @@ bool HandParticles::holds_still(const HandSlot& h, const Body& b, const HandBody
       pair.witness[0] == pair.witness[1])
     return false;
   const Mat3 Rt = b.pose.orientation.normalized().toRotationMatrix().transpose();
-  const Mat3 At = pair.anchor_pose.orientation.normalized().toRotationMatrix().transpose();
+  std::vector<BoneTransform>& anchored = pair.anchor_in_body;
+  const Mat3 At = anchored.size() < size_t(kHandJointCount)
+                      ? Mat3(pair.anchor_pose.orientation.normalized().toRotationMatrix().transpose())
+                      : Mat3::Zero();  // every bone is in `anchored` already
   for (int k = 0; k < kHandJointCount; ++k) {
     if (h.reach.reach[k] < 0) continue;  // moves no particle
     const BoneTransform now = in_body(Rt, b.pose.position, h.state.bones[k]);
-    const BoneTransform then = in_body(At, pair.anchor_pose.position, pair.anchor[k]);
+    while (anchored.size() <= size_t(k))
+      anchored.push_back(in_body(At, pair.anchor_pose.position, pair.anchor[anchored.size()]));
+    const BoneTransform& then = anchored[k];
     const Mat3 dR = now.leftCols<3>() - then.leftCols<3>();
     const Vec3 dj = dR * h.reach.bind_joint[k] + (now.col(3) - then.col(3));
     if (!(dR.norm() * h.reach.reach[k] + dj.norm() <= kHoldStill)) return false;
@@ -574,6 +581,7 @@ StageReport detect_contacts(HandParticles& particles, uint64_t body_version, dou
       } else {
         it->second.anchor.clear();
       }
+      it->second.anchor_in_body.clear();
     }
   }
   if (tested == 0) return stage_skipped(SkipReason::NoHandNearBody);
