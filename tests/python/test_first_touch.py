@@ -45,6 +45,13 @@ def test_the_skin_keeps_a_plate_still_under_a_lowered_palm():
     assert moved > 5e-3 and turned > 5.0
 
 
+def test_under_the_physical_push_the_plates_support_bears_the_palm_without_a_skin():
+    """docs/grasp.md "A resting body's support bears the press": the ground takes the press, nothing is pushed out."""
+    for hz in (30.0, 60.0, 120.0):
+        moved, turned = lower_palm_onto_plate(handsim.WorldDef(push_model=handsim.PushModel.PHYSICAL), speed=0.2, hz=hz)
+        assert moved <= 1e-3 and turned <= 1.0, (hz, moved, turned)
+
+
 def test_skin_settings_round_trip_and_are_checked():
     d = handsim.WorldDef(skin_depth=0.003, skin_pressure=15e3)
     back = recording.world_def_from_dict(recording.world_def_to_dict(d))
