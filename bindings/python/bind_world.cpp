@@ -179,14 +179,18 @@ std::string key_name(HandId id) { return "hands[" + id_repr("HandId", id.index, 
 std::vector<HandInput> to_inputs(const py::dict& hands) {
   std::vector<HandInput> inputs;
   inputs.reserve(hands.size());
+  // One type lookup per key and per frame (a caster's load without conversions is the isinstance test, and
+  // keeps the value), and the key's name only for a message: per entry of every step, an isinstance then a cast
+  // looked each type up twice, and building the name cost more than both.
+  py::detail::make_caster<HandId> key_caster;
+  py::detail::make_caster<HandFrame> frame_caster;
   for (auto [key, frame] : hands) {
-    if (!py::isinstance<HandId>(key))
+    if (!key_caster.load(key, false))
       throw py::type_error("hands: key " + std::string(py::repr(key)) + " (" +
                            std::string(py::str(py::type::of(key).attr("__name__"))) + ") is not a HandId");
-    const HandId id = key.cast<HandId>();
-    // The key's name only for the message: building it for every entry of every step cost more than the cast.
-    inputs.push_back({id, py::isinstance<HandFrame>(frame) ? frame.cast<HandFrame>()
-                                                           : cast_arg<HandFrame>(frame, key_name(id))});
+    const HandId id = py::detail::cast_op<const HandId&>(key_caster);
+    inputs.push_back({id, frame_caster.load(frame, false) ? py::detail::cast_op<const HandFrame&>(frame_caster)
+                                                          : cast_arg<HandFrame>(frame, key_name(id))});
   }
   return inputs;
 }
