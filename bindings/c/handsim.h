@@ -49,9 +49,11 @@
  * touches; docs/grasp.md "Push models"): the layout is unchanged, and 0, what a 2.5 host leaves there, is
  * HANDSIM_PUSH_FIT, the 2.5 behaviour.
  * 2.7: handsim_grasp_settings gained pinch_reach at its end (the grip span's thumb term; 0, the default, is the
- * span before). A layout change within the unreleased 2.x, as in 2.5. */
+ * span before). A layout change within the unreleased 2.x, as in 2.5.
+ * 2.8: push_model takes HANDSIM_PUSH_WRAP (the physical push, but a hand closing its grip only presses; docs/grasp.md
+ * "Wrap"). The layout is unchanged; a 2.7 library rejects the new value as an unknown model. */
 #define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 7
+#define HANDSIM_ABI_VERSION_MINOR 8
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -99,8 +101,9 @@ enum { HANDSIM_TERMINATION_CONVERGED = 0, HANDSIM_TERMINATION_MAX_ITERATIONS = 1
 enum { HANDSIM_LEFT = 0, HANDSIM_RIGHT = 1 };
 enum { HANDSIM_SAMPLING_RANDOM = 0, HANDSIM_SAMPLING_EVEN = 1 };
 enum { HANDSIM_CONTACTS_CLOSED_FORM = 0, HANDSIM_CONTACTS_BULLET_OBJECTS = 1 };
-/* WorldDef::push_model: eq. 2's fit as velocity (the default), or the pulp's bounded normal and friction impulses. */
-enum { HANDSIM_PUSH_FIT = 0, HANDSIM_PUSH_PHYSICAL = 1 };
+/* WorldDef::push_model: eq. 2's fit as velocity (the default), or the pulp's bounded normal and friction impulses,
+ * or those with a hand closing its grip only pressing (2.8). */
+enum { HANDSIM_PUSH_FIT = 0, HANDSIM_PUSH_PHYSICAL = 1, HANDSIM_PUSH_WRAP = 2 };
 enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_EVENT_GRASP_BEGIN = 2,
        HANDSIM_EVENT_GRASP_END = 3 };
 enum { HANDSIM_REASON_NONE = 0, HANDSIM_REASON_RELEASED = 1, HANDSIM_REASON_TRACKING_LOST = 2,

@@ -31,7 +31,7 @@ namespace Handsim
     public enum HandSide { Left = 0, Right = 1 }
     public enum ParticleSampling { Random = 0, Even = 1 }
     public enum ParticleContacts { ClosedForm = 0, BulletObjects = 1 }
-    public enum PushModel { Fit = 0, Physical = 1 }
+    public enum PushModel { Fit = 0, Physical = 1, Wrap = 2 }
     public enum EventType { ContactBegin = 0, ContactEnd = 1, GraspBegin = 2, GraspEnd = 3 }
     public enum EventReason { None = 0, Released = 1, TrackingLost = 2, BodyRemoved = 3, HandRemoved = 4 }
     public enum Stage { Skinning = 0, Contacts = 1, Deformation = 2, Grasp = 3, Attach = 4, PoseFit = 5, Dynamics = 6,

@@ -110,8 +110,9 @@ void bind_defs(py::module_& m) {
   bind_enum<ParticleContacts>(m, "ParticleContacts", "Narrow phase of hand particles against bodies.");
   bind_enum<PushModel>(m, "PushModel",
                        "How a hand moves a free body it touches but does not hold (docs/grasp.md \"Push models\"): "
-                       "FIT, eq. 2 as velocity (the default), or PHYSICAL, the pulp's bounded normal and friction "
-                       "impulses with the overlap removed as a displacement.");
+                       "FIT, eq. 2 as velocity (the default), PHYSICAL, the pulp's bounded normal and friction "
+                       "impulses with the overlap removed as a displacement, or WRAP, PHYSICAL with a hand that is "
+                       "closing its grip (GraspSettings.closing_distance) only pressing (docs/grasp.md \"Wrap\").");
 
   py::class_<WorldDef> wd(m, "WorldDef", "World settings (gravity, fixed substep, ground).");
   wd.def(py::init([](py::kwargs kw) { return from_kwargs<WorldDef>(kw, "WorldDef"); }))
@@ -128,7 +129,8 @@ void bind_defs(py::module_& m) {
       .def_readwrite("skin_pressure", &WorldDef::skin_pressure,
                      "Pa: the pulp's pressure at skin_depth of compression (it grows linearly up to it)")
       .def_readwrite("push_model", &WorldDef::push_model,
-                     "PushModel: how a hand moves a free body it touches but does not hold; FIT (the default) or PHYSICAL");
+                     "PushModel: how a hand moves a free body it touches but does not hold; FIT (the default), PHYSICAL "
+                     "or WRAP");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
   flag_property(wd, "ground", &WorldDef::ground, "WorldDef.ground");
   flag_property(wd, "paper_pipeline", &WorldDef::paper_pipeline, "WorldDef.paper_pipeline",

@@ -257,6 +257,16 @@ constexpr double kPulpFriction = 0.5;
 constexpr int kSupportSweeps = 256;
 constexpr double kSupportSettled = 1e-4;
 
+// PushModel::Wrap: whether `hand` is closing its grip, by the closing rule's own test (its grip span shrank by
+// GraspSettings::closing_distance within closing_window_s; never with closing_distance 0). A closing hand's fingers
+// are driven by the finger flexors and stop where they meet the body; where the tracked finger goes on into it, the
+// real one pressed on its surface. So its overlap is pulp pressing, not bone shoving the body out of the way
+// (docs/grasp.md "Wrap: a closing hand presses, it does not shove").
+bool wraps(const WorldDef& def, const HandSlot& hand) {
+  return def.push_model == PushModel::Wrap && def.grasp.closing_distance > 0 &&
+         hand.grip.closed_by() >= def.grasp.closing_distance;
+}
+
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame; `shift` (PushModel::Physical), when
 // given, first moves it by that rigid displacement (linear: of its centre, angular: its rotation vector) with no
 // velocity: the overlap removed, not turned into momentum.
@@ -368,7 +378,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     BodyVelocity carried;
     // Only the overlap beyond the skin is bone pushing the body (WorldDef::skin_depth; 0: all of it).
     const double skin = def.skin_depth;
-    const bool physical = def.push_model == PushModel::Physical;
+    const bool physical = def.push_model == PushModel::Physical || def.push_model == PushModel::Wrap;
     pressed.clear();
     overlap.clear();
     for (size_t e = first; e < end; ++e) {
@@ -376,12 +386,14 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       if (holds_group_of(entry.first.first, bi)) continue;
       const size_t before = from.size();
       const HandSlot& hand = hands[entry.first.first];
+      const bool wrapping = physical && wraps(def, hand);
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
         if (physical) {
-          // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below.
+          // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
+          // the hand is closing its grip (Wrap): then all of it is pulp.
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction));
-          if (c.depth > skin)
+          if (c.depth > skin && !wrapping)
             overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
           continue;
         }

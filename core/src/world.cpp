@@ -72,7 +72,7 @@ void validate_world_def(const WorldDef& def) {
   validate::in_range(def.skin_pressure, 0, 1e6, "world.skin_pressure", "Pa");
   if (int(def.particle_contacts) < 0 || int(def.particle_contacts) > 1)
     validate::fail("world.particle_contacts", "unknown method " + std::to_string(int(def.particle_contacts)));
-  if (int(def.push_model) < 0 || int(def.push_model) > 1)
+  if (int(def.push_model) < 0 || int(def.push_model) > int(PushModel::Wrap))
     validate::fail("world.push_model", "unknown model " + std::to_string(int(def.push_model)));
 }
 

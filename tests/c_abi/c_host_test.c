@@ -753,7 +753,7 @@ static void test_bad_inputs(void) {
   settings.particle_contacts = 5;
   REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.particle_contacts");
   MUST(handsim_world_settings_default(&settings));
-  settings.push_model = 2;
+  settings.push_model = HANDSIM_PUSH_WRAP + 1;  /* one past the last model */
   REJECT(NULL, handsim_world_create(&settings, &other), HANDSIM_INVALID_ARGUMENT, "settings.push_model");
 
   /* the world still steps after all that, exactly as before */

@@ -186,7 +186,7 @@ TEST(FirstTouch, SkinSettingsOutsideTheirRangeAreRefused) {
         },
         Error);
   }
-  for (int bad : {-1, 2}) {
+  for (int bad : {-1, int(PushModel::Wrap) + 1}) {
     WorldDef def;
     def.push_model = PushModel(bad);
     EXPECT_THROW(
@@ -235,6 +235,33 @@ double pushed_speed(PushModel model, double hz, double speed, double push_s) {
 }
 
 }  // namespace
+
+// PushModel::Wrap changes only what a hand closing its grip does: the flat palm (its grip span constant) driven at
+// 25 cm/s into the cube pushes it exactly as the physical push does, and pushes it along.
+TEST(FirstTouch, WrapPushesAsPhysicalWhileTheHandDoesNotClose) {
+  Pose end[2];
+  for (PushModel model : {PushModel::Physical, PushModel::Wrap}) {
+    WorldDef def;
+    def.push_model = model;
+    World world(def);
+    const HandId hand = world.add_hand(HandDef{});
+    BodyDef bd;
+    bd.shape = ShapeDef::box(kCube.half);
+    bd.mass = kCube.mass;
+    bd.pose.position = Vec3(0, kCube.half.y(), 0);
+    const BodyId cube = world.add_body(bd);
+    const double dt = 1 / 60.0, speed = 0.25;
+    for (int i = 0; i < 30; ++i) world.step(dt);
+    for (int i = 0; i < 72; ++i) {
+      const Pose palm{Vec3(-0.09 + speed * i * dt, kCube.half.y(), 0.02), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()))};
+      world.step(dt, {{hand, make_hand_frame(Handedness::Right, palm)}});
+    }
+    end[model == PushModel::Wrap] = world.body_pose(cube);
+  }
+  EXPECT_GT(end[0].position.x(), 0.15) << "it went along";
+  EXPECT_EQ(end[1].position, end[0].position);
+  EXPECT_EQ(end[1].orientation.coeffs(), end[0].orientation.coeffs());
+}
 
 // The same push at 30, 60 and 120 Hz leaves the body with the same speed (issue 20's frame-rate check). The palm
 // at 10 cm/s stops 0.3 s after it set off (a whole number of frames at every rate), a frame or two after its first

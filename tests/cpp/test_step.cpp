@@ -229,6 +229,36 @@ TEST(Step, PinchGraspsTheCubeWithThePadsReach) {
   EXPECT_LT((s.world.body_pose(s.box).position - s.rest.position).norm(), 0.002);
 }
 
+// PushModel::Wrap (docs/grasp.md "Wrap"): the pads-reach pinch closing its thumb onto the cube floating in zero
+// gravity, as the judge's cubes do (on the ground its support holds it under either push), put back at rest after
+// the approach. The physical push shoves the cube out of the thumb's way by the thumb's overlap before the pair
+// holds it (3.61 mm, printed); a hand closing its grip only presses under Wrap, so the cube stays within the 2 mm
+// Step.PinchGraspsTheCubeWithThePadsReach allows (1.48 mm), and both grasp it.
+TEST(Step, WrapKeepsTheCubeTheClosingPinchShovesUnderThePhysicalPush) {
+  double moved[2];
+  for (PushModel model : {PushModel::Physical, PushModel::Wrap}) {
+    WorldDef def;
+    def.ground = false;
+    def.gravity = Vec3::Zero();
+    def.grasp.pinch_reach = 0.065;
+    def.push_model = model;
+    Scene s(def);
+    s.approach();  // the index pad comes down along the +x face; the cube is put back at rest where it was
+    s.world.set_body_pose(s.box, s.rest);
+    s.world.set_body_velocity(s.box, Vec3::Zero(), Vec3::Zero());
+    for (int i = 1; i <= 15; ++i) s.step({s.pinch.frame(s.rest, s.open() + (s.hold() - s.open()) * i / 15.0)});
+    for (int i = 0; i < 5; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+    const double d = (s.world.body_pose(s.box).position - s.rest.position).norm();
+    std::printf("pads-reach pinch in zero gravity, %s push: the cube moved %.2f mm by the end of the pinch, %d grasp(s)\n",
+                model == PushModel::Wrap ? "wrap" : "physical", d * 1e3, count(s.log, EventType::GraspBegin));
+    EXPECT_EQ(count(s.log, EventType::GraspBegin), 1);
+    EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+    moved[model == PushModel::Wrap] = d;
+  }
+  EXPECT_GT(moved[0], 0.002);
+  EXPECT_LT(moved[1], 0.002);
+}
+
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
 // it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
 // gives the same opposing contacts and is not grasped, though GraspSettings::contacts() grasps it (the default, the

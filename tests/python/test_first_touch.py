@@ -67,4 +67,6 @@ def test_push_model_round_trips_and_is_checked():
     d = handsim.WorldDef(push_model=handsim.PushModel.PHYSICAL)
     back = recording.world_def_from_dict(recording.world_def_to_dict(d))
     assert back.push_model == handsim.PushModel.PHYSICAL
+    w = handsim.WorldDef(push_model=handsim.PushModel.WRAP)
+    assert recording.world_def_from_dict(recording.world_def_to_dict(w)).push_model == handsim.PushModel.WRAP
 

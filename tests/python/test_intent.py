@@ -167,6 +167,8 @@ def test_bad_rules_name_the_field():
         intent.parse_rule("skin:skin_depth=1")
     name, w = intent.parse_rule("physical:push_model=physical")  # the push model, by name
     assert intent._world_def_with(w).push_model == handsim.PushModel.PHYSICAL
+    name, w = intent.parse_rule("wrap:push_model=wrap")  # a closing hand only presses (docs/grasp.md "Wrap")
+    assert intent._world_def_with(w).push_model == handsim.PushModel.WRAP
     with pytest.raises(ValueError, match=r"WorldDef.push_model: bad value 'shove'"):
         intent.parse_rule("physical:push_model=shove")
 

@@ -79,7 +79,9 @@
   /* eq. 2 (default): the hands' velocity at the body plus the least-squares fit of the overlap, per frame */ \
   X(PushModel, Fit, 0, FIT, HANDSIM_PUSH_FIT)                                                             \
   /* the pulp's bounded normal and friction impulses; the overlap removed as a displacement, no velocity */ \
-  X(PushModel, Physical, 1, PHYSICAL, HANDSIM_PUSH_PHYSICAL)
+  X(PushModel, Physical, 1, PHYSICAL, HANDSIM_PUSH_PHYSICAL)                                             \
+  /* physical, but a hand closing its grip (GraspSettings::closing_distance) only presses: no overlap removed */ \
+  X(PushModel, Wrap, 2, WRAP, HANDSIM_PUSH_WRAP)
 
 #define HANDSIM_ENUM_BODY_MOTION(X)                                                                       \
   X(BodyMotion, Static, 0, STATIC, HANDSIM_MOTION_STATIC)                                                 \

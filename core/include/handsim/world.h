@@ -69,7 +69,8 @@ struct WorldDef {
   // body as velocity. Physical: the pulp pushes with impulses at the contacts, along the normals (never pulling)
   // and by Coulomb friction along the surface, each bounded by what the pulp passes in the frame (skin_pressure
   // over the particle's skin area for dt); the overlap beyond skin_depth is removed as the least displacement,
-  // with no velocity, so a graze leaves no momentum in the body.
+  // with no velocity, so a graze leaves no momentum in the body. Wrap: Physical, but a hand closing its grip
+  // (GraspSettings::closing_distance within closing_window_s) only presses; its overlap is not removed.
   using PushModel = handsim::PushModel;
   PushModel push_model = PushModel::Fit;
 };
