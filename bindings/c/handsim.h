@@ -28,32 +28,27 @@
 
 #include <stdint.h>
 
-/* ABI version: major << 16 | minor. The major changes when a struct layout or a function signature changes
- * (a host built against another major must not load this library); the minor when functions are added or a
- * reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the 1.0 rule).
- * 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand;
+/* ABI version: major << 16 | minor. The major changes when a struct layout or a function signature changes or a
+ * function is removed (a host built against another major must not load this library); the minor when functions
+ * are added or a reserved field gets a meaning (1.1: handsim_grasp_settings.across_parts, 0 in a 1.0 host = the
+ * 1.0 rule).
+ * 3.0 (issue 21 item 4): hands addressed by id are THE step: handsim_step_hands with handsim_hand_input {hand,
+ * frame}. The positional handsim_step is deprecated, kept through 3.x and removed at 4.0 (the old call kept one
+ * version). 3.0 also takes in what 2.3-2.8 added or changed within the unreleased 2.x; a host built against an
+ * earlier 2.x layout must not load this library, and the major now says so: handsim_open_grip, handsim_closing_grip,
+ * handsim_grasp_settings_contacts and handsim_grasp_settings_paper, and handsim_grasp_settings.slip_distance (2.3);
+ * handsim_hand_input and handsim_step_hands (2.4); handsim_world_settings.skin_depth and skin_pressure at its end
+ * (2.5); the reserved slot of handsim_world_settings become push_model, HANDSIM_PUSH_* (2.6);
+ * handsim_grasp_settings.pinch_reach at its end (2.7); push_model's HANDSIM_PUSH_WRAP (2.8: the physical push,
+ * but a hand closing its grip only presses; docs/grasp.md "Wrap"). The SONAME is libhandsim.so.3.
+ * History: 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand;
  * handsim_world_settings gained paper_pipeline and render_threads (it now mirrors every WorldDef field);
- * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value).
- * 2.1: save and restore (handsim_save_state, handsim_restore_state).
- * 2.2: the typed step report (handsim_step_report, handsim_last_step, HANDSIM_STAGE_*, HANDSIM_SKIP_*,
- * HANDSIM_WARNING_*).
- * 2.3: hands that close onto what they grasp (handsim_open_grip, handsim_closing_grip) and the grasp rules to
- * compare with (handsim_grasp_settings_contacts, handsim_grasp_settings_paper).
- * 2.4: hands addressed by id (handsim_hand_input, handsim_step_hands); handsim_step is deprecated and kept for
- * this ABI version (a minor bump: nothing existing changed; docs/native.md).
- * 2.5: handsim_world_settings gained skin_depth and skin_pressure at its end (the contact skin). Like
- * handsim_grasp_settings' squeeze_distance, pass_depth and slip_distance earlier in 2.x, a layout change made
- * within this session's 2.x, before any 2.x release, so no older 2.x host exists; after a release it would be a
- * major.
- * 2.6: handsim_world_settings' reserved slot became push_model (HANDSIM_PUSH_*, how a hand moves a free body it
- * touches; docs/grasp.md "Push models"): the layout is unchanged, and 0, what a 2.5 host leaves there, is
- * HANDSIM_PUSH_FIT, the 2.5 behaviour.
- * 2.7: handsim_grasp_settings gained pinch_reach at its end (the grip span's thumb term; 0, the default, is the
- * span before). A layout change within the unreleased 2.x, as in 2.5.
- * 2.8: push_model takes HANDSIM_PUSH_WRAP (the physical push, but a hand closing its grip only presses; docs/grasp.md
- * "Wrap"). The layout is unchanged; a 2.7 library rejects the new value as an unknown model. */
-#define HANDSIM_ABI_VERSION_MAJOR 2
-#define HANDSIM_ABI_VERSION_MINOR 8
+ * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value). 2.1: save and restore
+ * (handsim_save_state, handsim_restore_state). 2.2: the typed step report (handsim_step_report, handsim_last_step,
+ * HANDSIM_STAGE_*, HANDSIM_SKIP_*, HANDSIM_WARNING_*), and handsim_grasp_settings.squeeze_distance and pass_depth.
+ * 2.3-2.8: above. Within 2.x those layout changes were made as minors because no 2.x had been released. */
+#define HANDSIM_ABI_VERSION_MAJOR 3
+#define HANDSIM_ABI_VERSION_MINOR 0
 #define HANDSIM_ABI_VERSION ((HANDSIM_ABI_VERSION_MAJOR << 16) | HANDSIM_ABI_VERSION_MINOR)
 
 #if defined(_WIN32) || defined(__CYGWIN__)
@@ -169,7 +164,7 @@ typedef struct handsim_world_settings {
   int32_t particle_contacts;     /* HANDSIM_CONTACTS_* */
   int32_t paper_pipeline;        /* bool: every stage every step, as the paper did (a benchmark baseline) */
   int32_t render_threads;        /* 1..64 threads skin the render mesh when it is read (bit-identical to one) */
-  int32_t push_model;            /* HANDSIM_PUSH_*: how a hand moves a free body it touches (2.5: reserved, 0) */
+  int32_t push_model;            /* HANDSIM_PUSH_*: how a hand moves a free body it touches */
   double skin_depth;             /* m: a particle's overlap up to this presses the body as finger pulp (0: off) */
   double skin_pressure;          /* Pa: the pulp's pressure at skin_depth of compression */
 } handsim_world_settings;
@@ -506,8 +501,8 @@ HANDSIM_API int HANDSIM_CALL handsim_restore_state(handsim_world* world, const u
  * names "hands[k].frame.<field>". Everything is validated first. Since ABI 2.4. */
 HANDSIM_API int HANDSIM_CALL handsim_step_hands(handsim_world* world, double dt, const handsim_hand_input* hands,
                                                 int32_t hand_count);
-/* Deprecated since ABI 2.4, kept for this ABI version: hands[i] drives the i-th hand of handsim_hands() (fewer
- * frames than hands leave the rest untracked). A removed hand's slot goes to the next added hand, which then
+/* Deprecated since ABI 2.4, kept through 3.x and removed at 4.0: hands[i] drives the i-th hand of
+ * handsim_hands() (fewer frames than hands leave the rest untracked). A removed hand's slot goes to the next added hand, which then
  * takes the removed one's place in that order, so a frame meant for one hand can drive another; use
  * handsim_step_hands. Errors name "hands[i].<field>". */
 HANDSIM_API int HANDSIM_CALL handsim_step(handsim_world* world, double dt, const handsim_hand_frame* hands,

@@ -218,7 +218,7 @@ namespace Handsim
         public ParticleContacts ParticleContacts;
         public Bool32 PaperPipeline;
         public int RenderThreads;
-        public PushModel PushModel;  // how a hand moves a free body it touches (ABI 2.5: reserved, 0 = Fit)
+        public PushModel PushModel;  // how a hand moves a free body it touches
         public double SkinDepth;     // m: a particle's overlap up to this presses the body as finger pulp (0: off)
         public double SkinPressure;  // Pa: the pulp's pressure at SkinDepth of compression
 
@@ -612,7 +612,7 @@ namespace Handsim
     public static class Native
     {
         public const string Library = "handsim";
-        public const int AbiVersionMajor = 2;  // HANDSIM_ABI_VERSION_MAJOR of the handsim.h this file mirrors
+        public const int AbiVersionMajor = 3;  // HANDSIM_ABI_VERSION_MAJOR of the handsim.h this file mirrors
         public const int HandJointCount = 26;
         const CallingConvention Cdecl = CallingConvention.Cdecl;
 
@@ -862,8 +862,9 @@ namespace Handsim
             finally { Unpin(n); }
         }
 
-        /// <summary>Deprecated (kept for one version): hands[i] drives the i-th hand of Hands(), which a removed
-        /// and re-added hand reorders, so a frame can drive another hand than meant; use StepHands.</summary>
+        /// <summary>Deprecated (kept through ABI 3.x, removed at 4.0): hands[i] drives the i-th hand of Hands(),
+        /// which a removed and re-added hand reorders, so a frame can drive another hand than meant; use
+        /// StepHands.</summary>
         [Obsolete("Step(dt, hands) goes by the order of Hands(); use StepHands, whose frames name their hand")]
         public void Step(double dt, params TrackedHand[] hands)
         {

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Runs the Godot sample headless and checks it: lays out a copy of project/ in <work_dir> with the addon folder
-# <addon_dir> (handsim.gdnlib, handsim_world.gdns, bin/x11_64/ with libhandsim_godot.so and libhandsim.so.2: the
+# <addon_dir> (handsim.gdnlib, handsim_world.gdns, bin/x11_64/ with libhandsim_godot.so and libhandsim.so.<major>: the
 # build's build/dev/samples/godot/addons/handsim or the plugin bundle's godot/addons/handsim) and the session
 # <session.hsframes> (samples/godot/record_session.py writes it), runs HandsimWorld's bad-input and live-frame checks and the
 # project under godot3-server, and checks the result line: every step's hash equal to the recorded one, the final
@@ -25,6 +25,18 @@ cp -r "$here/project" "$work/project"
 rm -rf "$work/project/addons/handsim"
 cp -r "$addon" "$work/project/addons/handsim"
 cp "$session" "$work/project/session.hsframes"
+# The .gdnlib is a static file (the bundle's is rewritten by scripts/plugin): every library it names must be in the
+# addon and every libhandsim in the addon named, so one that names another ABI major than the built libhandsim's
+# SONAME (HANDSIM_ABI_VERSION_MAJOR of handsim.h) fails here; Godot itself would load it and break only an export.
+gdnlib_status=0
+for path in $(grep -o 'res://addons/handsim/[^"]*' "$work/project/addons/handsim/handsim.gdnlib" | sort -u); do
+  [ -f "$work/project/addons/handsim/${path#res://addons/handsim/}" ] ||
+    { echo "FAIL: handsim.gdnlib names $path, which the addon lacks" >&2; gdnlib_status=1; }
+done
+for lib in "$work/project/addons/handsim/bin/x11_64"/libhandsim.so.*; do
+  grep -qF "res://addons/handsim/bin/x11_64/$(basename "$lib")\"" "$work/project/addons/handsim/handsim.gdnlib" ||
+    { echo "FAIL: handsim.gdnlib does not name $(basename "$lib") under [dependencies]" >&2; gdnlib_status=1; }
+done
 # Godot keeps its user data, settings and cache under XDG_*_HOME: inside the work folder, not in the home.
 export XDG_DATA_HOME="$work/xdg/data" XDG_CONFIG_HOME="$work/xdg/config" XDG_CACHE_HOME="$work/xdg/cache"
 mkdir -p "$XDG_DATA_HOME" "$XDG_CONFIG_HOME" "$XDG_CACHE_HOME"
@@ -51,7 +63,7 @@ fi
 read -r -a f <<<"$line"
 godot_hash=${f[4]} mismatch=${f[6]}
 expected=$(tr -d '[:space:]' <"$expected_file")
-status=0
+status=$gdnlib_status
 [ $bad_rc = 0 ] && grep -q '^bad_input: [1-9][0-9]* passed, 0 failed' "$work/bad_input.log" ||
   { echo "FAIL: HandsimWorld's bad-input checks (bad_input.log)" >&2; status=1; }
 [ $live_rc = 0 ] && grep -q '^live: [1-9][0-9]* passed, 0 failed' "$work/live.log" ||

@@ -62,8 +62,14 @@ ldd_ok() {
 while IFS= read -r so; do
   check "ldd $(realpath --relative-to="$b" "$so")" ldd_ok "$so"
 done < <(find "$b" -type f -name '*.so*')
-echo "ldd lib/libhandsim.so.2:"
-ldd "$b/lib/libhandsim.so.2" | sed "s|$work/||; s| (0x[0-9a-f]*)||; s|^[[:space:]]*|  |" || true
+# libhandsim under the SONAME of the bundle's own handsim.h major, which the loader looks for.
+major=$(sed -n 's/^#define HANDSIM_ABI_VERSION_MAJOR \([0-9]*\)$/\1/p' "$b/include/handsim.h")
+soname_ok() {
+  [ -n "$major" ] && [ "$(patchelf --print-soname "$b/lib/libhandsim.so.$major")" = "libhandsim.so.$major" ]
+}
+check "lib/libhandsim.so.$major is there with that SONAME (handsim.h's ABI major)" soname_ok
+echo "ldd lib/libhandsim.so.$major:"
+ldd "$b/lib/libhandsim.so.$major" | sed "s|$work/||; s| (0x[0-9a-f]*)||; s|^[[:space:]]*|  |" || true
 
 # 2. The C host test against include/ and lib/. Its own inputs come from the source tree, after the bundle's
 # include/ so that handsim.h is the bundle's: handsim_layout.inc, and the core's enum and def tables
