@@ -36,6 +36,15 @@ struct Touch {
 
 double angle_between(const Quat& a, const Quat& b) { return Eigen::AngleAxisd(a.inverse() * b).angle(); }
 
+// The body as a free box of its size and mass with its centre at `at`.
+BodyId add_box(World& world, const Resting& body, const Vec3& at) {
+  BodyDef bd;
+  bd.shape = ShapeDef::box(body.half);
+  bd.mass = body.mass;
+  bd.pose.position = at;
+  return world.add_body(bd);
+}
+
 // The palm-down right hand (palm at the identity pose is the flat hand facing -y) over the body resting on the
 // ground, lowered at `speed` (m/s) from 2 cm above until the lowest particle over the body's top overlaps it by
 // `rest` (m), then held there for 0.5 s. Steps at `hz`.
@@ -44,11 +53,7 @@ Touch lower_onto(const WorldDef& def, const Resting& body, double speed, double 
   HandDef hand_def;
   hand_def.particle_count = 1182;  // explicit: the default may change
   const HandId hand = world.add_hand(hand_def);
-  BodyDef bd;
-  bd.shape = ShapeDef::box(body.half);
-  bd.mass = body.mass;
-  bd.pose.position = Vec3(0, body.half.y(), 0);
-  const BodyId id = world.add_body(bd);
+  const BodyId id = add_box(world, body, Vec3(0, body.half.y(), 0));
   const double dt = 1 / hz;
   for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
   const Pose start = world.body_pose(id);
@@ -115,11 +120,7 @@ TEST(FirstTouch, PushAt25CmPerSecondStillMovesTheBody) {
   for (double hz : {30.0, 60.0, 120.0}) {
     World world(with_skin());
     const HandId hand = world.add_hand(HandDef{});
-    BodyDef bd;
-    bd.shape = ShapeDef::box(kCube.half);
-    bd.mass = kCube.mass;
-    bd.pose.position = Vec3(0, kCube.half.y(), 0);
-    const BodyId cube = world.add_body(bd);
+    const BodyId cube = add_box(world, kCube, Vec3(0, kCube.half.y(), 0));
     const double dt = 1 / hz, speed = 0.25;
     for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
     for (int i = 0; i < int(1.2 * hz); ++i) {
@@ -146,11 +147,7 @@ TEST(FirstTouch, PinchStillGraspsAndLifts) {
       const HandFrame shape = make_hand_frame(Handedness::Right, Pose{}, pinch);
       const Vec3 between = (shape.joints[kThumbTip].position + shape.joints[kIndexTip].position) / 2;
       const double half = 0.008;
-      BodyDef bd;
-      bd.shape = ShapeDef::box(Vec3::Constant(half));
-      bd.mass = 0.05;
-      bd.pose.position = Vec3(0, half, 0);
-      const BodyId cube = world.add_body(bd);
+      const BodyId cube = add_box(world, Resting{"small cube", Vec3::Constant(half), 0.05}, Vec3(0, half, 0));
       Vec3 palm = Vec3(0, half, 0) - between;
       const double dt = 1 / hz;
       for (int i = 0; i < int(0.75 * hz); ++i) {
@@ -210,10 +207,7 @@ double pushed_speed(PushModel model, double hz, double speed, double push_s) {
   def.push_model = model;
   World world(def);
   const HandId hand = world.add_hand(HandDef{});
-  BodyDef bd;
-  bd.shape = ShapeDef::box(kCube.half);
-  bd.mass = kCube.mass;
-  const BodyId cube = world.add_body(bd);
+  const BodyId cube = add_box(world, kCube, Vec3::Zero());
   const double dt = 1 / hz;
   const Quat thumb_up(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()));
   // Where the palm's particles facing the cube are: its pose's x where they touch the cube's -x face.
@@ -245,11 +239,7 @@ TEST(FirstTouch, WrapPushesAsPhysicalWhileTheHandDoesNotClose) {
     def.push_model = model;
     World world(def);
     const HandId hand = world.add_hand(HandDef{});
-    BodyDef bd;
-    bd.shape = ShapeDef::box(kCube.half);
-    bd.mass = kCube.mass;
-    bd.pose.position = Vec3(0, kCube.half.y(), 0);
-    const BodyId cube = world.add_body(bd);
+    const BodyId cube = add_box(world, kCube, Vec3(0, kCube.half.y(), 0));
     const double dt = 1 / 60.0, speed = 0.25;
     for (int i = 0; i < 30; ++i) world.step(dt);
     for (int i = 0; i < 72; ++i) {
@@ -304,11 +294,7 @@ TEST(FirstTouch, PhysicalPushLeavesARestingBodyAHandAppearsInside) {
     hand_def.particle_count = 1182;
     const HandId hand = world.add_hand(hand_def);
     const Vec3 half(0.05, 0.03, 0.05);
-    BodyDef bd;
-    bd.shape = ShapeDef::box(half);
-    bd.mass = 0.5;
-    bd.pose.position = Vec3(0, half.y(), 0);
-    const BodyId id = world.add_body(bd);
+    const BodyId id = add_box(world, Resting{"box", half, 0.5}, Vec3(0, half.y(), 0));
     const double dt = 1 / hz;
     for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
     const Pose start = world.body_pose(id);
