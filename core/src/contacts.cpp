@@ -569,7 +569,7 @@ StageReport detect_contacts(HandParticles& particles, uint64_t body_version, dou
       auto key = std::make_pair(hi, bi);
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
-      if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair{GraspTracker(def.grasp), {}, 0, {}, {}}).first;
+      if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair(def.grasp)).first;
       keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);

@@ -166,6 +166,8 @@ constexpr double kHoldStill = 1e-6;
 
 // The contacts of one hand on one body in the current step, and the grasp state machine of that pair.
 struct HandBodyPair {
+  // A new pair: no contacts yet, its tracker under the world's grasp settings.
+  explicit HandBodyPair(const GraspSettings& grasp) : tracker(grasp) {}
   GraspTracker tracker;
   std::vector<ParticleContact> contacts;
   int previous_count = 0;

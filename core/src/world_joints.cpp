@@ -103,7 +103,7 @@ uint32_t group_root(const std::vector<Body>& bodies, const std::vector<Joint>& j
 
 namespace {
 // The paper pipeline solves with Ceres LM whatever the joint asks for (when Ceres is built in).
-JointSolver solver_of(const WorldDef& def, const Joint& j) {
+JointSolver solver_of([[maybe_unused]] const WorldDef& def, const Joint& j) {  // def: only with Ceres
 #if HANDSIM_WITH_CERES
   if (def.paper_pipeline) return JointSolver::LmCeres;
 #endif

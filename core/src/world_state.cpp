@@ -183,7 +183,7 @@ class Reader {
             std::to_string(key.second) + ", not both live here");
       if (i > 0 && !(last < key)) bad("contact pairs out of order");
       last = key;
-      auto& pair = fresh.emplace(key, HandBodyPair{GraspTracker(w_.def.grasp), {}, 0, {}, {}}).first->second;
+      auto& pair = fresh.emplace(key, HandBodyPair(w_.def.grasp)).first->second;
       f(key, pair);
     }
     if (commit_) m.swap(fresh);

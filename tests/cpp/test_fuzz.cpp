@@ -520,7 +520,9 @@ TEST(fuzz, RandomApiDriverKeepsTheWorldFiniteAndIntact) {
   f.run(frames);
   EXPECT_EQ(f.steps(), frames);
   EXPECT_GT(f.rejected(), frames / 100);  // the driver really exercised the error paths
-  if (frames >= 1000) EXPECT_GT(f.grasps(), 0);  // ... and the grasp path
+  if (frames >= 1000) {
+    EXPECT_GT(f.grasps(), 0);  // ... and the grasp path
+  }
   std::printf("fuzz: %ld frames (step calls), %ld API calls in all, %ld rejected, %ld grasps began\n", f.steps(),
               f.calls(), f.rejected(), f.grasps());
 }
