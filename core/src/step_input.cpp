@@ -21,6 +21,16 @@ void World::Impl::validate_hand_frame(const HandFrame& frame, const HandSlot& h,
   if (frame.handedness != h.def.handedness) validate::fail(argument + ".handedness", "does not match the hand it drives");
 }
 
+namespace {
+
+// validate_hand_frame's conditions without building argument names: a frame that fits (every frame of every step,
+// normally) costs no allocation; one that does not goes to validate_hand_frame, which names what is wrong.
+bool fits(const HandFrame& frame, const HandSlot& h) {
+  return frame_is_valid(frame) && frame.handedness == h.def.handedness;
+}
+
+}  // namespace
+
 SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
   validate_dt(dt);
   SlotFrames frames(hands.size(), nullptr);
@@ -38,8 +48,7 @@ SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& in
                                                std::to_string(first) + "]");
     }
     const HandFrame& frame = inputs[k].frame;
-    if (!frame_is_valid(frame) || frame.handedness != hands[id.index].def.handedness)
-      validate_hand_frame(frame, hands[id.index], argument() + ".frame");  // names what is wrong
+    if (!fits(frame, hands[id.index])) validate_hand_frame(frame, hands[id.index], argument() + ".frame");
     frames[id.index] = &frame;
   }
   return frames;
@@ -56,8 +65,7 @@ SlotFrames World::Impl::frames_by_position(double dt, const std::vector<HandFram
   size_t k = 0;
   for (uint32_t i = 0; i < hands.size() && k < list.size(); ++i) {
     if (!hands[i].alive) continue;
-    if (!frame_is_valid(list[k]) || list[k].handedness != hands[i].def.handedness)
-      validate_hand_frame(list[k], hands[i], "hands[" + std::to_string(k) + "]");
+    if (!fits(list[k], hands[i])) validate_hand_frame(list[k], hands[i], "hands[" + std::to_string(k) + "]");
     frames[i] = &list[k++];
   }
   return frames;
