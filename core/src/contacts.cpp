@@ -430,13 +430,21 @@ bool HandParticles::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair
   keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt,
                    pair.previous_faces, scratch.faces, found);
   if (!(found[0].normal.dot(found[1].normal) < def.grasp.cos_threshold)) return false;  // as witness_opposes
-  pair.entry_faces = pair.previous_faces;
-  auto by_particle = [](const EntryFace& f, int p) { return f.particle < p; };
-  for (const EntryFace& f : scratch.faces) {
-    auto it = std::lower_bound(pair.entry_faces.begin(), pair.entry_faces.end(), f.particle, by_particle);
-    if (it == pair.entry_faces.end() || it->particle != f.particle) return false;  // not touching at the anchor
-    *it = f;
+  // The entry faces are the previous ones with the witnesses' renewed. The previous list itself is moved over
+  // rather than copied (hundreds of faces on a pinched lid) and the witnesses' old faces kept aside:
+  // complete_contacts puts the previous list back together when something reads the contacts.
+  std::array<std::vector<EntryFace>::iterator, 2> at;
+  for (size_t k = 0; k < 2; ++k) {
+    at[k] = std::lower_bound(pair.previous_faces.begin(), pair.previous_faces.end(), scratch.faces[k].particle,
+                             [](const EntryFace& f, int p) { return f.particle < p; });
+    if (at[k] == pair.previous_faces.end() || at[k]->particle != scratch.faces[k].particle)
+      return false;  // not touching at the anchor
   }
+  for (size_t k = 0; k < 2; ++k) {
+    pair.witness_faces_before[k] = *at[k];
+    *at[k] = scratch.faces[k];
+  }
+  pair.entry_faces.swap(pair.previous_faces);  // (iterators stay with their elements)
   pair.contacts.swap(found);
   pair.lazy = true;
   pair.contact_pose = b.pose;
@@ -455,6 +463,11 @@ void HandParticles::complete_contacts(uint32_t hi) {
     HandBodyPair& pair = it->second;
     if (!pair.lazy) continue;
     const Body& b = bodies[it->first.second];
+    // The previous faces as hold_by_witness found them: the carried ones with the witnesses' old faces back.
+    pair.previous_faces = pair.entry_faces;
+    for (const EntryFace& f : pair.witness_faces_before)
+      *std::lower_bound(pair.previous_faces.begin(), pair.previous_faces.end(), f.particle,
+                        [](const EntryFace& e, int p) { return e.particle < p; }) = f;
     refresh_particles(h, false);  // every particle, with the same bits as the groups in reach
     const double radius = h.model->particle_radius, margin = def.grasp.release_distance;
     Vec3 lo, hi_b;

@@ -190,6 +190,9 @@ struct HandBodyPair {
   // skinned. `lazy`: `contacts` hold the witness pair alone; complete_contacts makes the full list from the
   // body's pose and velocity and the step's dt as detect_contacts saw them (contact_*), when something reads it.
   bool still = false, lazy = false;
+  // While lazy: the witnesses' entry faces before hold_by_witness renewed them (in particle order), from which
+  // complete_contacts puts `previous_faces` back together (the witness pass moves that list into entry_faces).
+  std::array<EntryFace, 2> witness_faces_before;
   Pose contact_pose;
   BodyVelocity contact_velocity;
   double contact_dt = 0;
