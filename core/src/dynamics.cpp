@@ -8,10 +8,12 @@
 namespace handsim {
 namespace {
 
-// Substep i of n (h seconds each); Bullet runs only when `physics` (physics_needed), else it idles.
+// Substep i of n (h seconds each); Bullet runs only when `physics` (physics_needed), else it idles. `placed`:
+// the hard children stay where the first substep placed them (simulate says when).
 void substep(const WorldModel& model, WorldState& state, std::vector<Body>& bodies, std::vector<Joint>& joints,
              const std::vector<HandSlot>& hands, BulletBackend& backend, const std::vector<uint32_t>& held,
-             const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, double h, int i, int n, bool physics) {
+             const std::vector<uint32_t>& dynamic, BodyBoxes& boxes, double h, int i, int n, bool physics,
+             bool placed) {
   // Kinematic bodies glide from the pose Bullet last saw to their target over the frame's substeps, so
   // Bullet derives the right velocity for pushing free bodies. (Declared kinematic bodies only move through
   // set_body_pose, which syncs them; the held ones are the gliders.)
@@ -32,7 +34,9 @@ void substep(const WorldModel& model, WorldState& state, std::vector<Body>& bodi
     backend.idle(h);
     ++state.idle_substeps;
   }
-  if (!model.joint_order.empty()) {
+  if (placed && i > 0) {
+    replace_children(model, joints, bodies, backend);
+  } else if (!model.joint_order.empty()) {
     integrate_joints(model, joints, bodies, h);
     place_children(model, joints, bodies, backend);  // after the parents moved, so a child rides on a falling or carried parent
   }
@@ -54,8 +58,13 @@ StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Bod
     state.accumulator = n * h;  // drop what cannot be caught up
   }
   const bool physics = n > 0 && physics_needed(model, state, bodies, joints, backend, held, dynamic, boxes, dt);
+  // Idle, the substeps move a body only through place_children (Bullet's bodies are not read back, a held body
+  // glides in Bullet's copy alone, a soft child's velocity is the same each substep); with no hard joint
+  // integrated either, nothing place_children reads changes after the first substep, so the later ones would
+  // place every child exactly where the first did (a held lid on a fixed base).
+  const bool placed = !physics && !model.joint_order.empty() && !joints_integrate(model, joints, bodies);
   for (int i = 0; i < n; ++i)
-    substep(model, state, bodies, joints, hands, backend, held, dynamic, boxes, h, i, n, physics);
+    substep(model, state, bodies, joints, hands, backend, held, dynamic, boxes, h, i, n, physics, placed);
   state.accumulator = std::max(0.0, state.accumulator - n * h);
   if (n > 0)
     for (uint32_t bi : held)

@@ -449,6 +449,13 @@ Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j);
 // Every hard child from its parent and coordinate, parents first: the child's pose and velocity, and Bullet's copy.
 void place_children(const WorldModel& model, const std::vector<Joint>& joints, std::vector<Body>& bodies,
                     BulletBackend& backend);
+// place_children again when nothing it reads has changed since it last ran (no coordinate, no parent moved): the
+// children's poses and velocities are what it would compute, so only Bullet's copies are set again, as it would.
+void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
+                      BulletBackend& backend);
+// Whether integrate_joints moves the hard joint `j` (its child not held, the joint not fixed), and any hard joint.
+bool integrates(const Joint& j, const Body& child);
+bool joints_integrate(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies);
 // One substep of the free hard joints (not held): gravity (none for a supported child), damping, limits.
 void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h);
 // Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the

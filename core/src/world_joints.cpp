@@ -275,6 +275,14 @@ void place_children(const WorldModel& model, const std::vector<Joint>& joints, s
   }
 }
 
+void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
+                      BulletBackend& backend) {
+  for (uint32_t k : model.joint_order) {
+    const Body& c = bodies[joints[k].child];
+    backend.move_kinematic(c.backend, c.pose);
+  }
+}
+
 // --- free dynamics of hard joints (one substep) ---
 
 namespace {
@@ -286,11 +294,21 @@ Mat3 cross_matrix(const Vec3& v) {
 }
 }  // namespace
 
+bool integrates(const Joint& j, const Body& child) {
+  return !child.grasp.grasped && j.type != JointType::Fixed;  // held: the hand decides (solve_joints)
+}
+
+bool joints_integrate(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies) {
+  for (uint32_t k : model.joint_order)
+    if (integrates(joints[k], bodies[joints[k].child])) return true;
+  return false;
+}
+
 void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h) {
   for (uint32_t k : model.joint_order) {
     Joint& j = joints[k];
     const Body& c = bodies[j.child];
-    if (c.grasp.grasped || j.type == JointType::Fixed) continue;  // held: the hand decides (solve_joints)
+    if (!integrates(j, c)) continue;
     const Vec3 g = c.supported ? Vec3::Zero() : model.def.gravity;
     const Pose p = parent_pose(bodies, j);
     const Pose now = joint_child_pose(bodies, j);
