@@ -384,9 +384,12 @@ TEST(Step, ThrownWithSpinLeavesWithThePointVelocityAndSpin) {
 // A flat hand, palm facing +x, sweeps through the cube's place at 0.25 m/s for 1.2 s: the cube slides ahead
 // of it along the ground, is never grasped, and never gets into the hand: the tracked particle spheres overlap
 // it by less than their radius (the skin itself never enters), and the particles drawn (deformed) are never
-// inside it.
+// inside it. Eq. 2's fit (PushModel::Fit) is what keeps the skin out: under the physical push the resting cube's
+// support bears the bounded press and the tracked palm goes deeper than r (docs/grasp.md "Wrap as the default").
 TEST(Step, FlatPalmPushSlidesTheCubeWithoutGrasping) {
-  World world;
+  WorldDef def;
+  def.push_model = PushModel::Fit;
+  World world(def);
   HandId hand = world.add_hand(HandDef{});
   BodyId box = world.add_body(cube(Vec3(0, kHalf, 0)));
   for (int i = 0; i < 30; ++i) world.step(kDt);

@@ -97,8 +97,9 @@ def press_placement():
 
 def press(count, sampling, place, radius=0.0, extra_depth=0.0, seed=1):
     """Pose-fit velocities, visible penetration and step time of one hand of `count` particles (radius 0: from
-    the spacing); extra_depth presses every pose that much deeper (the rule's tolerance comes from it)."""
-    world = handsim.World(handsim.WorldDef(gravity=[0, 0, 0], ground=False))
+    the spacing); extra_depth presses every pose that much deeper (the rule's tolerance comes from it). The push is
+    eq. 2's fit (PushModel.FIT), what this measures; the default push only presses a body (docs/grasp.md "Push models")."""
+    world = handsim.World(handsim.WorldDef(gravity=[0, 0, 0], ground=False, push_model=handsim.PushModel.FIT))
     hand = world.add_hand(handsim.HandDef(particle_count=count, sampling=sampling, particle_radius=radius, seed=seed))
     box = world.add_body(handsim.BodyDef(shape=handsim.Shape.box(BOX_HALF), mass=0.5, pose=[0, 0, 0, 0, 0, 0, 1]))
     rows, frames = [], []
