@@ -40,7 +40,9 @@
  * handsim_hand_input and handsim_step_hands (2.4); handsim_world_settings.skin_depth and skin_pressure at its end
  * (2.5); the reserved slot of handsim_world_settings become push_model, HANDSIM_PUSH_* (2.6);
  * handsim_grasp_settings.pinch_reach at its end (2.7); push_model's HANDSIM_PUSH_WRAP (2.8: the physical push,
- * but a hand closing its grip only presses; docs/grasp.md "Wrap"). The SONAME is libhandsim.so.3.
+ * but a hand closing its grip only presses; docs/grasp.md "Wrap"); and, within the unreleased 3.0,
+ * handsim_grasp_settings.velocity_window_s at its end (the hand's velocity over seconds, not frames). The SONAME is
+ * libhandsim.so.3.
  * History: 2.0: the grasp hysteresis in seconds instead of frames, and the closing and opening of the hand;
  * handsim_world_settings gained paper_pipeline and render_threads (it now mirrors every WorldDef field);
  * HANDSIM_REASON_HAND_REMOVED; the enum table (handsim_enum_count / handsim_enum_value). 2.1: save and restore
@@ -145,9 +147,10 @@ typedef struct handsim_grasp_settings {
                                closing_window_s begins a grasp (0: off) */
   double pass_depth;        /* m: contacts deeper than this do not begin a grasp (a pass-through; 0: off) */
   double slip_distance;     /* m: a hand this far past a held body static geometry stopped: its grip slips */
-  int32_t velocity_window;
+  int32_t velocity_window;  /* palm samples kept for the hand's velocity (at most) */
   int32_t across_parts;     /* bool, 1: the opposing pair comes from two rigid parts of the hand */
   double pinch_reach;       /* m: the grip span's thumb term is the thumb-index pad gap up to this (0: tip distance) */
+  double velocity_window_s; /* s: the hand's velocity is the slope over its samples of this long (0: all kept) */
 } handsim_grasp_settings;
 
 /* Mirrors handsim::WorldDef, field for field (the library's build checks it against the core's field table). */

@@ -188,6 +188,7 @@ namespace Handsim
         public int VelocityWindow;
         public int AcrossParts;  // bool
         public double PinchReach;
+        public double VelocityWindowS;
 
         /// <summary>The grasp rule before the hand's intent was read, for comparison (handsim_grasp_settings_contacts):
         /// ClosingDistance, OpeningDistance and PinchReach 0, every other field the default.</summary>

@@ -99,6 +99,7 @@ void bind_defs(py::module_& m) {
       .def_readwrite("release_distance", &GraspSettings::release_distance)
       .def_readwrite("tracking_grace_s", &GraspSettings::tracking_grace_s)
       .def_readwrite("velocity_window", &GraspSettings::velocity_window)
+      .def_readwrite("velocity_window_s", &GraspSettings::velocity_window_s)
       .def_static("contacts", &GraspSettings::contacts,
                   "The grasp rule before the hand's intent was read, for comparison (docs/grasp.md): eq. 3 with its "
                   "hysteresis, closing_distance, opening_distance and pinch_reach 0, every other field the default.")

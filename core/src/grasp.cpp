@@ -157,6 +157,7 @@ void validate_grasp_settings(const GraspSettings& s, const std::string& prefix) 
   validate::in_range(s.tracking_grace_s, 0, 3600, prefix + "tracking_grace_s", "s");
   if (s.velocity_window < 2 || s.velocity_window > 1000)
     validate::fail(prefix + "velocity_window", "must be in 2..1000 frames, got " + std::to_string(s.velocity_window));
+  validate::in_range(s.velocity_window_s, 0, 1, prefix + "velocity_window_s", "s");
 }
 
 // ---------------------------------------------------------------------------------------------------------
@@ -340,8 +341,9 @@ bool squeezing_pair(const std::vector<Vec3>& directions, const std::vector<int>&
 // ---------------------------------------------------------------------------------------------------------
 // HandMotionHistory
 
-HandMotionHistory::HandMotionHistory(int window) {
+HandMotionHistory::HandMotionHistory(int window, double span) : span_(span) {
   if (window < 2) validate::fail("window", "must be >= 2, got " + std::to_string(window));
+  if (!(span >= 0)) validate::non_negative(span, "span");
   samples_.resize(static_cast<size_t>(window));
 }
 
@@ -362,19 +364,32 @@ void HandMotionHistory::push(const Pose& palm, double time) {
 // newest. Linear: x_k the palm positions. Angular: the rotation vectors r_k = log(q_k q_newest^-1); under a
 // constant world-frame angular velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is
 // w. One pass for both, once per push.
+// The newest samples back to the first one at least span_ old, at least two. Tracker timestamps come in
+// microseconds, and a 60 Hz clock summed in doubles reaches 0.05 s a few ulps short: a sample a microsecond younger
+// than span_ counts as that old, so 60 Hz always gives 4 samples for 0.05 s, not 4 or 5 by rounding.
+int HandMotionHistory::samples_in_span() const {
+  if (!(span_ > 0)) return count_;
+  constexpr double kTimestampResolution = 1e-6;
+  const double newest = sample(0).time;
+  int n = 2;
+  while (n < count_ && newest - sample(n - 1).time < span_ - kTimestampResolution) ++n;
+  return n;
+}
+
 void HandMotionHistory::refresh_velocities() {
   if (!has_velocity()) {
     linear_ = angular_ = Vec3::Zero();
     return;
   }
   const Sample& newest = sample(0);
+  const int n = samples_in_span();
   double sum = 0;
-  for (int k = 0; k < count_; ++k) sum += sample(k).time - newest.time;
-  const double mean = sum / count_;
+  for (int k = 0; k < n; ++k) sum += sample(k).time - newest.time;
+  const double mean = sum / n;
   const Quat newest_inv = newest.pose.orientation.conjugate();
   double spread = 0;
   Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
-  for (int k = 0; k < count_; ++k) {
+  for (int k = 0; k < n; ++k) {
     const Sample& s = sample(k);
     const double tau = s.time - newest.time - mean;
     spread += tau * tau;

@@ -235,12 +235,15 @@ class GripHistory {
 };
 
 // The last few palm poses of a hand, for the velocity a released object is thrown with.
-// Velocities are least-squares slopes over the window: exact for constant linear and angular velocity, and a
-// single jittery sample moves them less than a two-sample difference would. Rotation between the oldest and
-// newest sample must stay below pi (at 60 Hz and 4 samples: |omega| < 60 rad/s).
+// Velocities are least-squares slopes over the samples of the last `span` seconds (GraspSettings::velocity_window_s;
+// 0: all kept): exact for constant linear and angular velocity, and a single jittery sample moves them less than a
+// two-sample difference would. Rotation between the oldest and newest sample used must stay below pi (over 0.05 s:
+// |omega| < 60 rad/s).
 class HandMotionHistory {
  public:
-  explicit HandMotionHistory(int window = GraspSettings{}.velocity_window);  // window >= 2
+  // window >= 2 samples kept; span >= 0 s.
+  explicit HandMotionHistory(int window = GraspSettings{}.velocity_window,
+                             double span = GraspSettings{}.velocity_window_s);
 
   // Times must be finite and strictly increasing; poses finite with unit quaternions. Throws handsim::Error.
   void push(const Pose& palm, double time);
@@ -249,8 +252,8 @@ class HandMotionHistory {
   int window() const { return static_cast<int>(samples_.size()); }
   bool has_velocity() const { return count_ >= 2; }  // below that, the velocities are zero
 
-  // Both are slopes over the whole history, evaluated once per push (the step asks for them per pair and
-  // per held body).
+  // Both are slopes over the samples of the last `span` seconds, evaluated once per push (the step asks for them
+  // per pair and per held body).
   Vec3 linear_velocity() const { return linear_; }    // of the palm position (m/s)
   Vec3 angular_velocity() const { return angular_; }  // world frame (rad/s)
   // Velocity of a point rigidly attached to the palm, at its current world position x: v + w x (x - palm),
@@ -280,9 +283,11 @@ class HandMotionHistory {
     double time = 0;
   };
   const Sample& sample(int age) const;  // 0 = newest
-  void refresh_velocities();  // linear_, angular_ from the samples held: both least-squares slopes
+  void refresh_velocities();  // linear_, angular_ from the samples of the span: both least-squares slopes
+  int samples_in_span() const;  // how many of the newest samples the slopes use
 
   std::vector<Sample> samples_;  // ring buffer
+  double span_ = 0;              // s (0: every sample held)
   int next_ = 0;
   int count_ = 0;
   Vec3 linear_ = Vec3::Zero(), angular_ = Vec3::Zero();  // the slopes of the samples now held

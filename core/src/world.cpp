@@ -280,7 +280,7 @@ HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel
   h.alive = true;
   h.def = def;
   h.model = std::move(model);
-  h.history = HandMotionHistory(this->def.grasp.velocity_window);
+  h.history = HandMotionHistory(this->def.grasp.velocity_window, this->def.grasp.velocity_window_s);
   h.state.tracked = false;
   h.state.tracked_positions = h.model->particle_bind;
   h.state.deformed_positions = h.model->particle_bind;

@@ -348,6 +348,16 @@ TEST(GraspTracker, RejectsBadInputAndSettings) {
   s = {};
   s.velocity_window = 1;
   EXPECT_THROW(validate_grasp_settings(s), Error);
+  for (double bad : {-0.01, 1.5, double(NAN)}) {
+    s = {};
+    s.velocity_window_s = bad;
+    try {
+      validate_grasp_settings(s, "world.grasp.");
+      ADD_FAILURE() << "velocity_window_s " << bad << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("world.grasp.velocity_window_s"), std::string::npos) << e.what();
+    }
+  }
 }
 
 // The hysteresis is in seconds: the same 0.03 s of opposing contacts takes 1 frame at 30 Hz, 2 at 60 Hz and
@@ -476,9 +486,33 @@ TEST(HandMotionHistory, SingleJitteryFrameHurtsLessThanFiniteDifference) {
   EXPECT_NEAR(err_lsq, 0.3 * jitter.norm() / dt, 1e-9);  // 1.5 dt / (5 dt^2) of the glitch
 }
 
+// The velocity's window is GraspSettings::velocity_window_s (0.05 s), whole frames back to the first sample that
+// old: 3 samples at 30 Hz, 4 at 45 and 60 Hz, 7 at 120 Hz (not 4 at every rate: 100 ms at 30 Hz, 25 ms at 120).
+// Under a constant acceleration a least-squares slope over equally spaced samples is the velocity at their mean
+// time, so it lags the newest sample by half the window.
+TEST(HandMotionHistory, WindowIsInSecondsNotFrames) {
+  const double accel = 2.0;
+  for (auto [hz, samples] : {std::pair{30.0, 3}, std::pair{45.0, 4}, std::pair{60.0, 4}, std::pair{120.0, 7}}) {
+    HandMotionHistory h;
+    const int frames = int(std::lround(hz));  // 1 s
+    for (int i = 0; i <= frames; ++i) {
+      const double t = i / hz;
+      h.push(Pose{Vec3(0.5 * accel * t * t, 0, 0), Quat::Identity()}, t);
+    }
+    const double lag = (samples - 1) / hz / 2;
+    EXPECT_NEAR(h.linear_velocity().x(), accel * (1.0 - lag), 1e-9) << hz << " Hz";
+    HandMotionHistory frames4(4, 0.0);  // the rule before: the last 4 frames at any rate
+    for (int i = 0; i <= frames; ++i) {
+      const double t = i / hz;
+      frames4.push(Pose{Vec3(0.5 * accel * t * t, 0, 0), Quat::Identity()}, t);
+    }
+    EXPECT_NEAR(frames4.linear_velocity().x(), accel * (1.0 - 1.5 / hz), 1e-9) << hz << " Hz";
+  }
+}
+
 TEST(HandMotionHistory, TooFewSamplesGiveZeroAndBadInputThrows) {
   HandMotionHistory h;
-  EXPECT_EQ(h.window(), 4);
+  EXPECT_EQ(h.window(), 16);
   EXPECT_EQ(h.linear_velocity(), Vec3::Zero());
   h.push(Pose{}, 0.0);
   EXPECT_FALSE(h.has_velocity());
@@ -487,6 +521,7 @@ TEST(HandMotionHistory, TooFewSamplesGiveZeroAndBadInputThrows) {
   EXPECT_THROW(h.push(Pose{}, 0.0), Error);  // time must increase
   EXPECT_THROW(h.push(Pose{Vec3(NAN, 0, 0), Quat::Identity()}, 1.0), Error);
   EXPECT_THROW(HandMotionHistory(1), Error);
+  EXPECT_THROW(HandMotionHistory(4, -0.01), Error);
   EXPECT_EQ(h.size(), 1);
   h.clear();
   EXPECT_EQ(h.size(), 0);

@@ -25,7 +25,8 @@
   X(GraspSettings, release_distance)                                                                  \
   X(GraspSettings, slip_distance)                                                                     \
   X(GraspSettings, tracking_grace_s)                                                                  \
-  X(GraspSettings, velocity_window)
+  X(GraspSettings, velocity_window)                                                                   \
+  X(GraspSettings, velocity_window_s)
 
 #define HANDSIM_FIELDS_WORLD_DEF(X)                                                                       \
   X(WorldDef, gravity)                                                                                    \

@@ -90,9 +90,17 @@ struct GraspSettings {
   // 0.2 s: typical optical-tracking dropouts (occlusion by the other hand, a finger leaving the view) last
   // a few frames; a hand that is really gone is released within a fifth of a second.
   double tracking_grace_s = 0.2;
-  // 4 samples (50 ms at 60 Hz) for the throw velocity: a least-squares slope over 4 samples weighs one bad
-  // frame 0.3x as much as a two-frame difference does, and lags only ~25 ms.
-  int velocity_window = 4;
+  // The hand's velocity (what a released body is thrown with, what the push carries and presses at) is the
+  // least-squares slope over its palm samples of the last velocity_window_s seconds: from the newest back to the
+  // first sample at least that old (a microsecond less, a tracker timestamp's resolution), at least two. In
+  // seconds, so that a tracker at 30 Hz and one at 120 Hz move bodies alike (a sample count is 100 ms at 30 Hz
+  // and 25 ms at 120 Hz: docs/grasp.md "Why a push depends on the frame rate"). 0.05 s is the 4 samples at
+  // 60 Hz this was measured as: a slope over them weighs one bad frame 0.3x as much as a two-frame difference
+  // does, and lags only ~25 ms. 0: every kept sample (a count of velocity_window frames, the rule before).
+  double velocity_window_s = 0.05;
+  // The most palm samples kept for it: 16 hold 0.05 s up to 300 Hz (Leap runs at up to 120 Hz, optical motion
+  // capture at 240); above that rate the slope spans velocity_window - 1 frames.
+  int velocity_window = 16;
 
   // The rule before the hand's intent was read (the default until issue 20's intent rule became it; docs/grasp.md,
   // "Intent"): eq. 3 from where the skin is, with this hysteresis and release; closing_distance and
