@@ -169,6 +169,32 @@ void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, cons
   }
 }
 
+// The deepest of the child's points (at `child_pose`) in `parent` and of the parent's points in the child: both
+// ways, as for the static stops, since a lid's points lie on its own corners and face centres, none of them on the
+// base's front edge a lid turning down past shut meets first. The joints' stages have no scratch of their own;
+// one per thread keeps the step free of allocations once grown.
+namespace {
+double depth_in(const Body& child, const Pose& child_pose, const Body& parent) {
+  thread_local StaticStopScratch scratch;
+  double depth = 0;
+  double radius = 0;
+  shape_points(child.prepared, child_pose, scratch.points, radius);
+  scratch.contacts.clear();
+  collide_particles(scratch.points, radius, parent.prepared, parent.pose, scratch.contacts);
+  shape_points(parent.prepared, parent.pose, scratch.theirs, radius);
+  collide_particles(scratch.theirs, radius, child.prepared, child_pose, scratch.contacts);
+  for (const ParticleContact& c : scratch.contacts) depth = std::max(depth, c.depth);
+  return depth;
+}
+}  // namespace
+
+bool stopped_by_parent(const std::vector<Body>& bodies, const Joint& j, const Pose& before, const Pose& after) {
+  if (j.parent == kWorldParent) return false;
+  const Body& child = bodies[j.child];
+  const Body& parent = bodies[j.parent];
+  return depth_in(child, after, parent) > kStaticSlop && depth_in(child, before, parent) <= kStaticSlop;
+}
+
 // Where the held body `b` is this frame: palm * T_rel of its primary hand, stopped by static geometry. A hand more
 // than slip_distance past the stopped body has its grip slip along it: T_rel is re-taken.
 Pose held_pose(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,

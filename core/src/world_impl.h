@@ -456,7 +456,14 @@ void replace_children(const WorldModel& model, const std::vector<Joint>& joints,
 // Whether integrate_joints moves the hard joint `j` (its child not held, the joint not fixed), and any hard joint.
 bool integrates(const Joint& j, const Body& child);
 bool joints_integrate(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies);
-// One substep of the free hard joints (not held): gravity (none for a supported child), damping, limits.
+// Whether the parent's surface stops the hard child of `j` moving from pose `before` to `after`: a child outside
+// its parent (within StaticStop's slop, 0.5 mm) is stopped at its surface as at a limit, since a real parent is a
+// solid the child cannot pass, while the joint's limits alone let a lid on a -pi..pi hinge swing down through its
+// base. A child already inside its parent's shape is not stopped: that shape is then not the surface that bounds
+// it (a drawer sliding in a cabinet given as a solid box). Joints to the world are not stopped. (static_stop.cpp)
+bool stopped_by_parent(const std::vector<Body>& bodies, const Joint& j, const Pose& before, const Pose& after);
+// One substep of the free hard joints (not held): gravity (none for a supported child), damping, limits, the
+// parent's surface.
 void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h);
 // Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the
 // coordinate's rate that gets there over dt, and the solve in the joint's report.

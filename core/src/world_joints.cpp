@@ -320,13 +320,17 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
       const double inertia = a.dot(world_inertia(c, now.orientation) * a) + m * (r.squaredNorm() - std::pow(r.dot(a), 2));
       const double torque = a.dot(r.cross(m * g));
       j.rate = implicit_damped(j.rate, h * torque / inertia, h * j.damping / inertia);
+      const double before = j.value;
       j.value += h * j.rate;
       clamp_coordinate(j.value, j.rate, j.hinge.lower, j.hinge.upper);
+      if (stopped_by_parent(bodies, j, now, hinge_child_pose(j.hinge, p, j.value))) j.value = before, j.rate = 0;
     } else if (j.type == JointType::Slider) {
       const Vec3 a = p.orientation * j.slider.axis;
       j.rate = implicit_damped(j.rate, h * g.dot(a), h * j.damping / m);
+      const double before = j.value;
       j.value += h * j.rate;
       clamp_coordinate(j.value, j.rate, j.slider.lower, j.slider.upper);
+      if (stopped_by_parent(bodies, j, now, slider_child_pose(j.slider, p, j.value))) j.value = before, j.rate = 0;
     } else {
       // Three rotational DOFs about the pivot: Euler's equations with the inertia about the pivot.
       const Vec3 r = now.position - p.transform(j.ball.pivot_parent);
@@ -351,6 +355,10 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
           next = r2.rotation;
           j.spin = rotation_vector(p.orientation * next * (p.orientation * j.rotation).conjugate()) / h;
         }
+      }
+      if (stopped_by_parent(bodies, j, now, ball_child_pose(j.ball, p, next))) {
+        j.spin = Vec3::Zero();
+        continue;
       }
       j.rotation = next;
     }
@@ -416,9 +424,20 @@ void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j
 void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt) {
   project_push(def, bodies, j, simulated, dt);
   if (!j.solved) return;
+  const Pose p = parent_pose(bodies, j);
   if (j.type == JointType::Ball) {
+    if (stopped_by_parent(bodies, j, joint_child_pose(bodies, j), ball_child_pose(j.ball, p, j.solved_rotation))) {
+      j.spin = Vec3::Zero();
+      return;
+    }
     j.rotation = j.solved_rotation;  // the solved rotation itself (re-deriving it from spin * dt would round)
   } else {
+    const bool hinge = j.type == JointType::Hinge, slider = j.type == JointType::Slider;
+    const Pose after = hinge ? hinge_child_pose(j.hinge, p, j.last.value) : slider_child_pose(j.slider, p, j.last.value);
+    if ((hinge || slider) && stopped_by_parent(bodies, j, joint_child_pose(bodies, j), after)) {
+      j.rate = 0;
+      return;
+    }
     j.value = j.last.value;
   }
 }
