@@ -135,9 +135,89 @@ Vec3 static_push(const WorldDef& def, const std::vector<Body>& bodies, const Bod
 
 }  // namespace
 
-// Where `b` rests on static geometry (the ground, bodies of mass 0): the points standing for its shape (as for the
-// stops above) that lie within kSupportGap of a static surface, each a contact the support pushes along its
-// surface normal, never pulls, with Bullet's combined Coulomb coefficient of the two surfaces (the product, as
+namespace {
+
+// Where `s` lies within kSupportGap of `b` (its shape's `points` and `radius` at its pose, its world box lo..hi):
+// b's points in s grown by the gap, and s's own points near b in b grown by the gap (a base's front edge under a
+// lid's overhanging lip, where none of the lid's points stands). Each as the point and the normal out of s.
+void surfaces_near(const Body& b, const Eigen::Matrix3Xd& points, double radius, const Vec3& lo, const Vec3& hi,
+                   const Body& s, StaticStopScratch& scratch, std::vector<ParticleContact>& out) {
+  out.clear();
+  collide_particles(points, radius + kSupportGap, s.prepared, s.pose, out);
+  Eigen::Matrix3Xd& theirs = scratch.theirs;
+  double their_radius = 0;
+  shape_points(s.prepared, s.pose, theirs, their_radius);
+  std::vector<std::pair<int, int>>& ranges = scratch.ranges;
+  ranges.clear();
+  const double reach = their_radius + kSupportGap;
+  for (int i = 0; i < int(theirs.cols()); ++i)
+    if (((theirs.col(i).array() >= lo.array() - reach) && (theirs.col(i).array() <= hi.array() + reach)).all()) {
+      if (ranges.empty() || ranges.back().second != i) ranges.push_back({i, i + 1});
+      else ++ranges.back().second;
+    }
+  if (ranges.empty()) return;
+  std::vector<ParticleContact>& inside = scratch.contacts;  // s's points in b: b's normal there is out of b
+  inside.clear();
+  collide_particle_ranges(theirs, ranges, reach, b.prepared, b.pose, inside);
+  for (ParticleContact c : inside) {
+    c.normal = -c.normal;
+    out.push_back(c);
+  }
+}
+
+// A free body bears what rests on it as the table does when it rests itself, directly or through a stack, on
+// static geometry: what is pressed down onto it passes down to the table through it. Only a body under gravity
+// rests; `path` holds the bodies already asked about below the one that rests on `s` (no body bears itself).
+bool bears(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes, StaticStopScratch& scratch,
+           const Body& s, std::vector<const Body*>& path);
+
+// Whether `s` supports `b` (the ground aside), and with which of its surfaces near b (`out`): static geometry
+// with all of them, a body that bears (above) with those facing up against gravity, the ones its own support
+// holds against a press; a press sideways into a free body slides it.
+bool supports(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes, StaticStopScratch& scratch,
+              const Body& b, const Eigen::Matrix3Xd& points, double radius, const Vec3& lo, const Vec3& hi,
+              const Body& s, std::vector<const Body*>& path, std::vector<ParticleContact>& out) {
+  out.clear();
+  if (!s.alive || &s == &b) return false;
+  const bool fixed = s.declared == BodyMotion::Static;
+  if (!fixed && !bears(def, bodies, boxes, scratch, s, path)) return false;
+  surfaces_near(b, points, radius, lo, hi, s, scratch, out);
+  if (!fixed) {
+    const Vec3 up = -def.gravity.normalized();
+    out.erase(std::remove_if(out.begin(), out.end(), [&](const ParticleContact& c) { return !(c.normal.dot(up) > 0); }),
+              out.end());
+  }
+  return !out.empty();
+}
+
+bool bears(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes, StaticStopScratch& scratch,
+           const Body& s, std::vector<const Body*>& path) {
+  if (s.declared != BodyMotion::Dynamic || s.jointed() || s.grasp.grasped || !(def.gravity.squaredNorm() > 0))
+    return false;
+  if (std::find(path.begin(), path.end(), &s) != path.end()) return false;
+  // Its own points and neighbours: the caller's scratch holds the body it asks for.
+  Eigen::Matrix3Xd points;
+  double radius = 0;
+  shape_points(s.prepared, s.pose, points, radius);
+  if (def.ground && (points.row(1).array() - radius - def.ground_height).minCoeff() < kSupportGap) return true;
+  Vec3 lo, hi;
+  local_box_in_world(s.prepared.local_lo, s.prepared.local_hi, s.pose, lo, hi);
+  std::vector<uint32_t> near;
+  boxes.bodies_near(lo, hi, kSupportGap, &near);
+  std::vector<ParticleContact> surfaces;
+  path.push_back(&s);
+  bool rests = false;
+  for (uint32_t ti : near)
+    if ((rests = supports(def, bodies, boxes, scratch, s, points, radius, lo, hi, bodies[ti], path, surfaces))) break;
+  path.pop_back();
+  return rests;
+}
+
+}  // namespace
+
+// Where `b` rests on its support: the ground, bodies of mass 0, and free bodies that rest on them (bears, above).
+// Each of the surfaces within kSupportGap (supports, above) is a contact the support pushes along its surface
+// normal, never pulls, with Bullet's combined Coulomb coefficient of the two surfaces (the product, as
 // btManifoldResult combines them). A point further than that is not borne by the surface.
 void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                       StaticStopScratch& scratch, const Body& b, std::vector<SkinContact>& out) {
@@ -159,13 +239,13 @@ void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, cons
   Vec3 lo, hi;
   local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, b.pose, lo, hi);
   boxes.bodies_near(lo, hi, kSupportGap, &scratch.near);
-  std::vector<ParticleContact>& contacts = scratch.contacts;
+  std::vector<const Body*>& path = scratch.path;
+  path.assign(1, &b);
+  std::vector<ParticleContact>& surfaces = scratch.surfaces;
   for (uint32_t si : scratch.near) {
     const Body& s = bodies[si];
-    if (!s.alive || s.declared != BodyMotion::Static) continue;
-    contacts.clear();  // the body's points, grown by the gap, in the static body
-    collide_particles(points, radius + kSupportGap, s.prepared, s.pose, contacts);
-    for (const ParticleContact& c : contacts) put(c.point, c.normal, b.friction * s.friction);
+    if (!supports(def, bodies, boxes, scratch, b, points, radius, lo, hi, s, path, surfaces)) continue;
+    for (const ParticleContact& c : surfaces) put(c.point, c.normal, b.friction * s.friction);
   }
 }
 

@@ -245,6 +245,8 @@ struct StaticStopScratch {
   Eigen::Matrix3Xd points, theirs;
   std::vector<std::pair<int, int>> ranges;
   std::vector<uint32_t> near;
+  std::vector<ParticleContact> surfaces;  // support_contacts: a support's surfaces near the body
+  std::vector<const Body*> path;          // and the bodies asked whether they bear it (bears)
 };
 
 // The id of a table's slot `index`: the index with the slot's generation now.

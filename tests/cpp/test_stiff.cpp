@@ -641,4 +641,13 @@ void pull_apart(const WorldDef& wd) {
 
 TEST_P(stiff, TwoHandsPullAGraspedObjectApart) { pull_apart({}); }
 
+// Under the physical push the free lid rests on the base, which rests on the table: the base bears the pinch's
+// press as the table would, so the closing pinch takes the lid where it lies (docs/grasp.md "A resting body's
+// support bears the press").
+TEST_P(stiff, TwoHandsPullAGraspedObjectApartUnderWrap) {
+  WorldDef wd;
+  wd.push_model = PushModel::Wrap;
+  pull_apart(wd);
+}
+
 HANDSIM_BOTH_GRASP_RULES(stiff);
