@@ -295,6 +295,33 @@ TEST(JointsWorld, SliderFallsLikeAFreeBodyUntilItsLimit) {
   EXPECT_NEAR(world.body_pose(block).position.x(), 0.0, 1e-15);
 }
 
+// A hard child outside its parent is stopped by the parent's surface as at a limit, whatever its limits; one that
+// starts inside its parent's shape (a drawer in a cabinet given as a solid box) is not (docs/grasp.md "A jointed
+// child is stopped by its parent"). Two blocks on vertical sliders of +-0.5 m fall under gravity from a fixed box.
+TEST(JointsWorld, ChildOutsideItsParentStopsOnItsSurfaceAndOneInsideSlidesThrough) {
+  WorldDef wd;
+  wd.ground = false;
+  World world(wd);
+  const BodyId cabinet = world.add_body(box_body(Vec3::Constant(0.1), Vec3::Zero(), 0.0));
+  auto slide = [&](const Vec3& at) {
+    SliderDef s;
+    s.parent = cabinet;
+    s.child = world.add_body(box_body(Vec3::Constant(0.02), at, 0.3));
+    s.axis = Vec3::UnitY();
+    s.lower = -0.5;
+    s.upper = 0.5;
+    return world.add_joint(s);
+  };
+  const JointId on_top = slide(Vec3(-0.05, 0.12, 0));  // resting on the top face (its bottom at y = 0.1)
+  const JointId inside = slide(Vec3(0.05, 0.0, 0));
+  const double start = world.joint_state(on_top).value;  // its height above the cabinet's centre, 0.12 m
+  for (int i = 0; i < 60; ++i) world.step(kDt);
+  const double fell = start - world.joint_state(on_top).value;
+  EXPECT_GE(fell, 0.0);
+  EXPECT_LE(fell, 0.0005);  // at most the stop's 0.5 mm slop into the top
+  EXPECT_EQ(world.joint_state(inside).value, -0.5);  // fell through to its limit
+}
+
 TEST(JointsWorld, BallJointSettlesOnItsConeWhenGravityPullsOutside) {
   WorldDef wd;
   wd.ground = false;
