@@ -283,6 +283,22 @@ double GripHistory::approached_by(const GripHistory& other) const {
   return now < 0 ? 0.0 : widest - now;
 }
 
+namespace {
+// How many of `count` samples (time_of(age), age 0 the newest) a slope over `span` seconds uses: the newest back to
+// the first one at least span old, at least two (span 0: all). Tracker timestamps come in microseconds, and a 60 Hz
+// clock summed in doubles reaches 0.05 s a few ulps short: a sample a microsecond younger than span counts as that
+// old, so 60 Hz always gives 4 samples for 0.05 s, not 4 or 5 by rounding.
+template <class TimeOf>
+int newest_in_span(int count, double span, const TimeOf& time_of) {
+  if (!(span > 0)) return count;
+  constexpr double kTimestampResolution = 1e-6;
+  const double newest = time_of(0);
+  int n = 2;
+  while (n < count && newest - time_of(n - 1) < span - kTimestampResolution) ++n;
+  return n;
+}
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------------------
 // Squeeze: the hand's articulation carrying an opposing pair into the body
 
@@ -297,6 +313,28 @@ namespace {
 Vec3 to_bind(const BoneTransform& b, const Vec3& x) { return b.leftCols<3>().transpose() * (x - b.col(3)); }
 Vec3 to_world(const BoneTransform& b, const Vec3& x) { return b.leftCols<3>() * x + b.col(3); }
 }  // namespace
+
+Vec3 ArticulationHistory::point_velocity(const HandModel& model, int particle, const Vec3& position, double span,
+                                         int most) const {
+  const int count = std::min(static_cast<int>(samples_.size()), most);
+  if (count < 2) return Vec3::Zero();
+  const Sample& newest = samples_.back();
+  auto time_of = [&](int age) { return samples_[samples_.size() - 1 - static_cast<size_t>(age)].time; };
+  const int n = newest_in_span(count, span, time_of);
+  const int bone = main_bone(model, particle);
+  const Vec3 rest = to_bind(newest.bones[bone], position);  // the point in its bone's bind frame
+  double sum = 0;
+  for (int k = 0; k < n; ++k) sum += time_of(k) - newest.time;
+  const double mean = sum / n;
+  double spread = 0;
+  Vec3 slope = Vec3::Zero();
+  for (int k = 0; k < n; ++k) {
+    const double tau = time_of(k) - newest.time - mean;
+    spread += tau * tau;
+    slope += tau * (to_world(samples_[samples_.size() - 1 - static_cast<size_t>(k)].bones[bone], rest) - position);
+  }
+  return slope / spread;
+}
 
 double ArticulationHistory::inward(const HandModel& model, int particle, const Vec3& position,
                                    const Vec3& normal) const {
@@ -364,16 +402,8 @@ void HandMotionHistory::push(const Pose& palm, double time) {
 // newest. Linear: x_k the palm positions. Angular: the rotation vectors r_k = log(q_k q_newest^-1); under a
 // constant world-frame angular velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is
 // w. One pass for both, once per push.
-// The newest samples back to the first one at least span_ old, at least two. Tracker timestamps come in
-// microseconds, and a 60 Hz clock summed in doubles reaches 0.05 s a few ulps short: a sample a microsecond younger
-// than span_ counts as that old, so 60 Hz always gives 4 samples for 0.05 s, not 4 or 5 by rounding.
 int HandMotionHistory::samples_in_span() const {
-  if (!(span_ > 0)) return count_;
-  constexpr double kTimestampResolution = 1e-6;
-  const double newest = sample(0).time;
-  int n = 2;
-  while (n < count_ && newest - sample(n - 1).time < span_ - kTimestampResolution) ++n;
-  return n;
+  return newest_in_span(count_, span_, [this](int age) { return sample(age).time; });
 }
 
 void HandMotionHistory::refresh_velocities() {

@@ -171,6 +171,11 @@ class ArticulationHistory {
   // palm coordinates (its own bone's motion relative to the palm bone), turned into the world by the current palm.
   // 0 with fewer than two samples; a palm particle gives 0.
   double inward(const HandModel& model, int particle, const Vec3& position, const Vec3& normal) const;
+  // The velocity of the point `position` carried by `particle`'s own bone (the palm's motion and the finger's
+  // articulation together), measured as HandMotionHistory measures the palm's: the least-squares slope of its world
+  // positions over the newest samples back to the first one at least `span` seconds old (at least two, at most
+  // `most`; span 0: the newest `most`). Zero with fewer than two samples.
+  Vec3 point_velocity(const HandModel& model, int particle, const Vec3& position, double span, int most) const;
 
   bool in_time_order() const;  // strictly increasing times, as push keeps them (a restored state is checked)
 

@@ -202,23 +202,30 @@ BodyVelocity skin_press(const std::vector<SkinContact>& contacts, const InverseI
 }
 
 // A contact as the pulp presses it (within WorldDef::skin_depth, or any contact of the physical push). It keeps
-// the body from entering the hand further: the body must move away at the hand's own speed into it there (the
-// palm's rigid motion). The pulp does not spring back: it is strongly damped (it recovers over a few hundred
-// ms), so a body lying in it stays where the hand left it instead of being pushed out of a resting hand every
-// frame. The pressure grows linearly with the compression up to skin_pressure at skin_depth and stays there
-// beyond it (the bone takes the rest; without a skin, skin_depth = 0, the pulp is fully compressed at once), over
-// the skin area the particle stands for (hexagonal spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
+// the body from entering the hand further: the body must move away at the hand's own speed into it there, the
+// palm's rigid motion at the point, or for a hand closing its grip (`closing`, PushModel::Wrap) the point's own
+// motion on its bone: the finger flexors drive a closing finger at its own articulated speed, and where it meets a
+// body it pushes the body at that speed. Measured by the palm's motion, a still palm whose fingers curl gives the
+// body nothing and the tracked fingers curl on through it (docs/grasp.md "Wrap: a closing hand presses"). The pulp
+// does not spring back: it is strongly damped (it recovers over a few hundred ms), so a body lying in it stays where
+// the hand left it instead of being pushed out of a resting hand every frame. The pressure grows linearly with the
+// compression up to skin_pressure at skin_depth and stays there beyond it (the bone takes the rest; without a skin,
+// skin_depth = 0, the pulp is fully compressed at once), over the skin area the particle stands for (hexagonal
+// spacing s: (sqrt(3)/2) s^2 each), for the frame's dt.
 // `friction`: the pulp's Coulomb coefficient along the surface (0: it only presses).
 namespace {
 
-SkinContact skin_contact(const WorldDef& def, const ParticleContact& c, const HandSlot& hand, double dt, double friction) {
+SkinContact skin_contact(const WorldDef& def, const ParticleContact& c, const HandSlot& hand, double dt, double friction,
+                         bool closing = false) {
   const double spacing = hand.model->particle_spacing;
   const double area = std::sqrt(3.0) / 2 * spacing * spacing;
   const double compressed = def.skin_depth > 0 ? std::min(1.0, c.depth / def.skin_depth) : 1.0;
   SkinContact s;
   s.point = c.point;
   s.normal = c.normal;
-  s.hand_velocity = hand.history.point_velocity(c.point);
+  s.hand_velocity = closing ? hand.articulation.point_velocity(*hand.model, c.particle, c.point,
+                                                                def.grasp.velocity_window_s, def.grasp.velocity_window)
+                            : hand.history.point_velocity(c.point);
   s.max_impulse = def.skin_pressure * compressed * area * dt;
   s.friction = friction;
   return s;
@@ -392,7 +399,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
           // the hand is closing its grip (Wrap): then all of it is pulp.
-          pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction));
+          pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
           if (c.depth > skin && !wrapping)
             overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
           continue;

@@ -402,13 +402,16 @@ StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, doubl
     // there at rest instead of being flung (a 1e6 m jump threw a held cube at 1.8e7 m/s; issue 22).
     if (h.has_pose && teleported(h.palm, palm, dt)) {
       h.history.clear();
+      h.articulation.clear();  // nor do its bones' (Wrap's press reads the closing fingers' world motion from them)
       report.warnings |= warning_bit(StepWarning::HandTeleported);
     }
     h.palm = palm;
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
     h.grip.push(grip_span(*h.model, h.state.bones, def.grasp.pinch_reach), h.palm.position, time + dt, def.grasp.closing_window_s);
-    if (def.grasp.squeeze_distance > 0) h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
+    // The squeeze reads the articulation over the closing window; Wrap's press the closing fingers' own speed.
+    if (def.grasp.squeeze_distance > 0 || def.push_model == PushModel::Wrap)
+      h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
     if (def.paper_pipeline) particles.skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;

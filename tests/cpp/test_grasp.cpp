@@ -161,6 +161,54 @@ TEST(ArticulationHistory, CountsOnlyTheHandsOwnMotion) {
   EXPECT_THROW(history.push(state.bones, 1.0, 0.5), Error);  // time must increase
 }
 
+// ArticulationHistory::point_velocity (PushModel::Wrap's press): a particle's own velocity on its bone. The hand moved
+// as a whole at constant velocity gives every particle that velocity; the index curling with the palm still gives
+// its tip the speed of its skinned motion (within 5 %: it is taken to ride its main bone) and a palm particle none.
+TEST(ArticulationHistory, PointVelocityIsTheParticlesOwn) {
+  const HandModel model = build_hand_model(HandDef{});
+  int tip = -1, palm = -1;
+  for (int p = 0; p < model.particle_count(); ++p) {
+    int k = 0;
+    model.particle_weights.col(p).maxCoeff(&k);
+    if (tip < 0 && model.particle_bones(k, p) == kIndexDistal) tip = p;
+    if (palm < 0 && rigid_part(model, p) == kPalm) palm = p;
+  }
+  ASSERT_GE(tip, 0);
+  ASSERT_GE(palm, 0);
+  auto frame = [&](double curl, const Vec3& at) {
+    HandPoseParams params;
+    params.curl = {0, curl, 0, 0, 0};
+    return make_hand_frame(Handedness::Right, Pose{at, Quat::Identity()}, params);
+  };
+  const double dt = 1 / 60.0, span = GraspSettings{}.velocity_window_s;
+  const int most = GraspSettings{}.velocity_window;
+  {
+    const Vec3 u(0.3, -0.1, 0.2);
+    ArticulationHistory history;
+    HandState state;
+    for (int i = 0; i <= 10; ++i) {
+      pose_hand(model, frame(0.4, u * (dt * i)), state);
+      history.push(state.bones, dt * i, 0.5);
+    }
+    for (int p : {tip, palm})
+      EXPECT_LT((history.point_velocity(model, p, state.tracked_positions.col(p), span, most) - u).norm(), 1e-9);
+  }
+  ArticulationHistory history;
+  HandState state;
+  EXPECT_EQ(history.point_velocity(model, tip, Vec3::Zero(), span, most), Vec3::Zero());  // no samples
+  Vec3 before = Vec3::Zero();
+  for (int i = 0; i <= 10; ++i) {
+    if (i > 0) before = state.tracked_positions.col(tip);
+    pose_hand(model, frame(0.02 * i, Vec3::Zero()), state);
+    history.push(state.bones, dt * i, 0.5);
+  }
+  const Vec3 skinned = (Vec3(state.tracked_positions.col(tip)) - before) / dt;
+  ASSERT_GT(skinned.norm(), 0.05);
+  const Vec3 v = history.point_velocity(model, tip, state.tracked_positions.col(tip), span, most);
+  EXPECT_LT((v - skinned).norm(), 0.05 * skinned.norm());
+  EXPECT_LT(history.point_velocity(model, palm, state.tracked_positions.col(palm), span, most).norm(), 1e-9);
+}
+
 TEST(OpposingContacts, FewerThanTwoOrIdenticalNeverOppose) {
   EXPECT_FALSE(opposing_contacts({}));
   EXPECT_FALSE(opposing_contacts({Vec3::UnitX()}));

@@ -1,4 +1,7 @@
 """The peers benchmark (issue 25): its JSON shape and handsim's accuracy in it, never its times."""
+import numpy as np
+
+import handsim
 from handsim.bench import peers
 
 
@@ -18,3 +21,13 @@ def test_peers_one_repetition():
                 assert set(r["handsim_over_peer"]) == {m["engine"] for m in mine}
     assert isinstance(doc["goal_met"], bool)
     assert "lid_drag" in peers.table(doc)
+
+
+def test_the_cube_carry_pinch_grasps_under_wrap():
+    """The cube rests on the ground; the hand comes down with the thumb open and closes thumb and index on it. Under
+    PushModel.WRAP the closing thumb presses the cube at its own speed (docs/grasp.md "Wrap"), so the pair meets
+    opposite faces and grasps, as the fit's shove made them (and not the palm's speed, with which the supported cube
+    let the bones pass 32.7 mm in through the faces they entered by)."""
+    cube = peers.HandsimCube(push_model=handsim.PushModel.WRAP)
+    cube.build()  # raises when the pinch does not grasp
+    assert np.linalg.norm(cube.offset) < 0.01

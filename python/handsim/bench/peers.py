@@ -213,12 +213,16 @@ class HandsimCube:
     name = "handsim"
     _pinch_cache = {}
 
-    def __init__(self, particles=None):
+    def __init__(self, particles=None, push_model=None):
         self.particles = particles
+        self.push_model = push_model  # None: WorldDef's default
         self.label = "handsim" if particles is None else f"handsim ({particles} particles)"
 
     def build(self):
-        world = handsim.World(handsim.WorldDef())
+        wd = handsim.WorldDef()
+        if self.push_model is not None:
+            wd.push_model = self.push_model
+        world = handsim.World(wd)
         R = handsim.Handedness.RIGHT
         hd = handsim.HandDef(handedness=R)
         if self.particles:
