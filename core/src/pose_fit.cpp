@@ -227,6 +227,10 @@ SkinContact skin_contact(const WorldDef& def, const ParticleContact& c, const Ha
                                                                 def.grasp.velocity_window_s, def.grasp.velocity_window)
                             : hand.history.point_velocity(c.point);
   s.max_impulse = def.skin_pressure * compressed * area * dt;
+  // A closing hand's finger that does not move into the body there did not press into it: the body came to it
+  // (pushed by another finger) and its bone stops it, at any force, as the physical push's overlap removal does; the
+  // overlap stays (no shove), only further entry is stopped.
+  if (closing && !(s.hand_velocity.dot(-c.normal) > 0)) s.max_impulse = std::numeric_limits<double>::infinity();
   s.friction = friction;
   return s;
 }

@@ -233,8 +233,9 @@ TEST(Step, PinchGraspsTheCubeWithThePadsReach) {
 // gravity, as the judge's cubes do (on the ground its support holds it under either push), put back at rest after
 // the approach. The physical push shoves the cube out of the thumb's way by the thumb's overlap before the pair
 // holds it (3.61 mm, printed). Under Wrap the frame before the hand counts as closing shoves it the same (1.48 mm);
-// then the closing thumb presses it at the thumb's own speed (1.5 mm a frame) for the one frame before the pair
-// holds it (2.98 mm, printed): less than the shove, and both grasp it.
+// then the closing thumb presses it at the thumb's own speed (1.5 mm a frame) into the index, which stops it at one
+// particle it pivots about, for the one frame before the pair holds it (2.41 mm, printed): less than the shove, and
+// both grasp it.
 TEST(Step, WrapKeepsTheCubeTheClosingPinchShovesUnderThePhysicalPush) {
   double moved[2];
   for (PushModel model : {PushModel::Physical, PushModel::Wrap}) {
