@@ -1014,21 +1014,6 @@ def test_real_recording_replays_near_the_box_and_the_cube(name, leap_recordings)
             pytest.xfail(f"issue 20: open hands grasp the cube ({', '.join(sorted(known))})")
 
 
-
-@pytest.mark.parametrize("name", ["confidence2", "grab"])
-def test_under_wrap_no_open_hand_grasps_the_cube(name, leap_recordings):
-    """Under PushModel::Wrap (issue 20 item 2; docs/grasp.md "Wrap as the default, measured") a body an open hand
-    touches is pressed by the pulp, not fitted into the hand, so the two recordings whose open hands grasp the cube
-    under the fit (OPEN_HAND_GRASPS) meet every expectation: no grasp by an open hand, and the closing hand grasps the
-    cube as it closes. Pinned to Wrap so that it holds whichever push is the default."""
-    from handsim import input_report
-    motion = replay.motion_from_leap(dev_recording(leap_recordings, name))
-    world_def = handsim.WorldDef(push_model=handsim.PushModel.WRAP)
-    jewelry, free = (replay.run(replay.session_from_motion(motion, scene, world_def=world_def), name)
-                     for scene in ("jewelry_box", "free_box"))
-    checks = input_report.expectations(motion, jewelry, free)
-    assert all(checks.values()), checks
-
 @pytest.mark.xfail(strict=True, reason="issue 20: with Leap's own metacarpal bases the clapping hand's edge touches "
                                       "with two parts, so across_parts no longer keeps it from a grasp (docs/grasp.md)")
 def test_three_claps_grasps_only_without_the_two_part_rule(leap_recordings):
