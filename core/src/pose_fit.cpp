@@ -278,18 +278,14 @@ bool wraps(const WorldDef& def, const HandSlot& hand) {
          hand.grip.closed_by() >= def.grasp.closing_distance;
 }
 
-// A touched body gets the velocity eq. 2 or the skin gave it for this frame; `shift` (PushModel::Physical), when
-// given, first moves it by that rigid displacement (linear: of its centre, angular: its rotation vector) with no
-// velocity: the overlap removed, not turned into momentum.
+// A touched body gets the velocity eq. 2 or the skin gave it for this frame, from the pose `from` (b.pose, or where
+// the physical push's displacement put it: moved_out).
 void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
-                       Body& b, const Vec3& linear, const Vec3& angular, double dt, const BodyVelocity* shift = nullptr) {
-  const Pose from = shift ? advanced(b.pose, shift->linear, shift->angular, 1.0) : b.pose;
+                       Body& b, const Pose& from, const Vec3& linear, const Vec3& angular, double dt) {
   if (b.jointed()) {
     Joint& j = joints[b.hard_joint];
     // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
     b.supported = linear.dot(def.gravity) < 0;
-    // The displacement is set at once, as a grasped child's pose is (no joint rate from it).
-    if (shift) solve_grasped(def, bodies, j, from, dt);
     // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
     project_push(def, bodies, j, advanced(from, linear, angular, dt), dt);
     return;
@@ -298,6 +294,85 @@ void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vect
   b.linear = linear;
   b.angular = angular;
   backend.write(b.backend, b.pose, b.linear, b.angular);
+}
+
+// The friction angle's bound on a push that turns a hinge's child (or slides a slider's): a finger pressing along
+// its normal while the child's surface point must slide under it to move along its path (at angle phi to the
+// push) drives it with n cos(phi) and is held back by the pulp's friction, up to mu n sin(phi); past
+// tan(phi) = 1 / mu the push jams (a wedge's self-locking) and the joint bears it. kPulpFriction 0.5: phi > 63.4
+// deg, i.e. the push's share along the path below mu / sqrt(1 + mu^2) = 0.447.
+const double kJammed = kPulpFriction / std::sqrt(1 + kPulpFriction * kPulpFriction);
+
+// A hinge's or slider's child out of the bone's overlap (`overlap`): the step of its coordinate (docs/grasp.md "Why
+// a push depends on the frame rate"). Each contact pushes its point of the child along -normal, and a step q of
+// the coordinate moves that point along its path (coordinate_motion), by lever * q along the push. The step is
+// where the contacts' pushes balance about the joint, each pushing as a spring while it overlaps:
+// sum lever (depth - lever q)+ = 0, over the contacts that can drive the joint (not jammed: kJammed). Overlap on
+// one side only is all cleared; fingers past both faces of a lid, which no step clears, leave it where the two
+// sides' pushes balance, whatever the contacts' order. (The 6-DOF least displacement projected on the joint, a
+// Gauss-Seidel solve of such an overlap, grew its impulses every sweep and stopped where the last contacts in its
+// order pulled: the lid jumped +-2 deg frame to frame.) A push near the lid's radius jams: the hinge bears it, so
+// it cannot throw the lid by depth / (its tiny lever).
+double overlap_step(const std::vector<Body>& bodies, const Joint& j, const std::vector<SkinContact>& overlap,
+                    std::vector<CoordinatePush>& levers) {
+  levers.clear();
+  double moment = 0;  // about the joint at q = 0 (every contact overlaps there), positive: the step goes up
+  for (const SkinContact& c : overlap) {
+    const Vec3 path = coordinate_motion(bodies, j, c.point);
+    const double lever = -c.normal.dot(path);
+    if (!(std::abs(lever) >= kJammed * path.norm()) || !(lever != 0)) continue;
+    const double depth = -c.hand_velocity.dot(c.normal);  // the overlap contact's "speed" is the overlap
+    levers.push_back({depth / lever, lever * depth, lever * lever});
+    moment += lever * depth;
+  }
+  if (!(moment != 0)) return 0;
+  const double sign = moment > 0 ? 1.0 : -1.0;  // the way the step goes
+  // The contacts pushing against the step overlap more the further it goes: always active. Those pushing with it
+  // are active until the step clears them (their breakpoints, measured the way the step goes).
+  double resisting_moment = 0, resisting_square = 0;
+  size_t pushing = 0;
+  for (const CoordinatePush& l : levers) {
+    if (l.breakpoint * sign > 0) {
+      levers[pushing++] = {l.breakpoint * sign, l.moment, l.square};
+    } else {
+      resisting_moment += l.moment;
+      resisting_square += l.square;
+    }
+  }
+  levers.resize(pushing);
+  // The balance: where sum lever (depth - lever q)+ (non-increasing in q) crosses zero. Between two breakpoints
+  // the active contacts are those clearing later and every resisting one: q = their moments / their squares.
+  std::sort(levers.begin(), levers.end(),
+            [](const CoordinatePush& a, const CoordinatePush& b) { return a.breakpoint < b.breakpoint; });
+  for (size_t k = levers.size() - 1; k-- > 0;) {  // sums over each contact and those clearing after it
+    levers[k].moment += levers[k + 1].moment;
+    levers[k].square += levers[k + 1].square;
+  }
+  for (const CoordinatePush& l : levers) {
+    const double balanced = (l.moment * sign + resisting_moment * sign) / (l.square + resisting_square);
+    if (balanced <= l.breakpoint) return sign * balanced;
+  }
+  return sign * levers.back().breakpoint;  // nothing resists: the last contact to clear sets the step
+}
+
+// PushModel::Physical's displacement out of the bone's overlap (scratch.overlap), with no velocity: the pose it
+// puts `b` at. A free body (or a ball joint's child, then projected on its joint) moves by the least rigid
+// displacement in its mass and inertia metric that moves every contact out by its overlap; a hinge's or slider's
+// child steps its coordinate (overlap_step).
+Pose moved_out(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, PoseFitScratch& scratch,
+               const Body& b, const InverseInertia& inverse, double dt) {
+  if (b.jointed()) {
+    Joint& j = joints[b.hard_joint];
+    if (j.type == JointType::Hinge || j.type == JointType::Slider) {
+      shift_coordinate(bodies, j, overlap_step(bodies, j, scratch.overlap, scratch.levers));
+      return joint_child_pose(bodies, j);
+    }
+  }
+  const BodyVelocity shift = skin_press(scratch.overlap, inverse, {});
+  const Pose from = advanced(b.pose, shift.linear, shift.angular, 1.0);
+  // The displacement is set at once, as a grasped child's pose is (no joint rate from it).
+  if (b.jointed()) solve_grasped(def, bodies, joints[b.hard_joint], from, dt);
+  return from;
 }
 
 // PushModel::Physical: the pulp's bounded impulses (`pressed`) set the velocity; the least displacement out of the
@@ -323,13 +398,13 @@ void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<J
   support.clear();
   if (!b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, support);
   const bool displaced = support.empty() && !scratch.overlap.empty();
-  const BodyVelocity shift = displaced ? skin_press(scratch.overlap, inverse, {}) : BodyVelocity{};
+  const Pose from = displaced ? moved_out(def, bodies, joints, scratch, b, inverse, dt) : b.pose;
   const Vec3 weight = def.gravity * dt;
   pressed.insert(pressed.end(), support.begin(), support.end());
   const BodyVelocity v = support.empty() ? skin_press(pressed, inverse, {b.linear, b.angular})
                                          : skin_press(pressed, inverse, {b.linear + weight, b.angular}, kSupportSweeps,
                                                       kSupportSettled);
-  push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt, displaced ? &shift : nullptr);
+  push_touched_body(def, bodies, joints, backend, b, from, v.linear, v.angular, dt);
 }
 
 }  // namespace
@@ -425,12 +500,12 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       physical_push(def, bodies, joints, backend, boxes, scratch, b, dt);
     } else if (!from.empty()) {
       const BodyVelocity correction = velocity_from_motion(fit_rigid_motion(from, to), b.pose.position, dt);
-      push_touched_body(def, bodies, joints, backend, b, carried.linear / double(from.size()) + correction.linear,
+      push_touched_body(def, bodies, joints, backend, b, b.pose, carried.linear / double(from.size()) + correction.linear,
                         carried.angular / double(from.size()) + correction.angular, dt);
     } else if (!pressed.empty()) {
       // Only pulp touches the body: it presses, and Bullet weighs the press against the body's support.
       const BodyVelocity v = skin_press(pressed, inverse_inertia(b), {b.linear, b.angular});
-      push_touched_body(def, bodies, joints, backend, b, v.linear, v.angular, dt);
+      push_touched_body(def, bodies, joints, backend, b, b.pose, v.linear, v.angular, dt);
     } else {
       continue;
     }

@@ -85,6 +85,16 @@ struct SkinContact {
   double friction = 0;
 };
 
+// One overlapping contact on a hinge's or slider's child, as overlap_step (pose_fit.cpp) weighs it: `breakpoint`, the
+// step of the coordinate that clears it (depth / lever); `moment` and `square`, its lever times its depth and its
+// lever squared (the lever: how far the point moves along its push per unit of the coordinate), summed over it and
+// the contacts after it once sorted.
+struct CoordinatePush {
+  double breakpoint = 0;
+  double moment = 0;
+  double square = 0;
+};
+
 // A rigid body's inverse mass properties about its centre of mass, world frame.
 struct InverseInertia {
   Vec3 centre = Vec3::Zero();

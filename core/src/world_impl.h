@@ -326,6 +326,7 @@ struct PoseFitScratch {
   std::vector<Vec3> from, to;
   std::vector<SkinContact> pressed;  // contacts within the skin
   std::vector<SkinContact> overlap;  // the bone's overlap (PushModel::Physical)
+  std::vector<CoordinatePush> levers;  // a hinge's or slider's child's overlap (overlap_step)
   std::vector<SkinContact> support;  // where a pushed body rests on static geometry (PushModel::Physical)
   StaticStopScratch stop;            // support_contacts' query of the static geometry
   std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
@@ -452,8 +453,7 @@ Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j);
 void place_children(const WorldModel& model, const std::vector<Joint>& joints, std::vector<Body>& bodies,
                     BulletBackend& backend);
 // place_children again when nothing it reads has changed since it last ran (no coordinate, no parent moved): the
-// children's poses and velocities are what it would compute, and Bullet's copies where it put them: Bullet is told
-// they stay there (keep_kinematic), which is what setting them again would tell it.
+// children's poses and velocities are what it would compute, so only Bullet's copies are set again, as it would.
 void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
                       BulletBackend& backend);
 // Whether integrate_joints moves the hard joint `j` (its child not held, the joint not fixed), and any hard joint.
@@ -471,6 +471,12 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
 // Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the
 // coordinate's rate that gets there over dt, and the solve in the joint's report.
 void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
+// How far `point`, on the child of a hinge or slider, moves per unit of the joint's coordinate (hinge: the axis
+// crossed with the point's arm from the pivot, m/rad; slider: the unit axis); zero for ball and fixed joints.
+Vec3 coordinate_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point);
+// A hinge's or slider's coordinate moved by `step` and held within its limits, with no rate from it; not moved when
+// its parent's surface stops the child (stopped_by_parent), as solve_grasped.
+void shift_coordinate(const std::vector<Body>& bodies, Joint& j, double step);
 // A grasped soft-joint child (`held`: held_bodies()) chases its primary hand with the velocity that reaches it
 // in one substep h; the Bullet constraint pulls it back.
 void drive_soft_children(const std::vector<uint32_t>& held, std::vector<Body>& bodies,

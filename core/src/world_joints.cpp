@@ -277,7 +277,10 @@ void place_children(const WorldModel& model, const std::vector<Joint>& joints, s
 
 void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
                       BulletBackend& backend) {
-  for (uint32_t k : model.joint_order) backend.keep_kinematic(bodies[joints[k].child].backend);
+  for (uint32_t k : model.joint_order) {
+    const Body& c = bodies[joints[k].child];
+    backend.move_kinematic(c.backend, c.pose);
+  }
 }
 
 // --- free dynamics of hard joints (one substep) ---
@@ -437,6 +440,28 @@ void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& 
     }
     j.value = j.last.value;
   }
+}
+
+Vec3 coordinate_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point) {
+  const Pose p = parent_pose(bodies, j);
+  switch (j.type) {
+    case JointType::Hinge: return (p.orientation * j.hinge.axis_parent).cross(point - p.transform(j.hinge.pivot_parent));
+    case JointType::Slider: return p.orientation * j.slider.axis;
+    case JointType::Ball:
+    case JointType::Fixed: break;
+  }
+  return Vec3::Zero();
+}
+
+void shift_coordinate(const std::vector<Body>& bodies, Joint& j, double step) {
+  const bool hinge = j.type == JointType::Hinge;
+  if (!hinge && j.type != JointType::Slider) return;
+  const Pose now = joint_child_pose(bodies, j);
+  double value = j.value + step, rate = 0;  // a displacement gives no rate
+  clamp_coordinate(value, rate, hinge ? j.hinge.lower : j.slider.lower, hinge ? j.hinge.upper : j.slider.upper);
+  const Pose p = parent_pose(bodies, j);
+  const Pose after = hinge ? hinge_child_pose(j.hinge, p, value) : slider_child_pose(j.slider, p, value);
+  if (!stopped_by_parent(bodies, j, now, after)) j.value = value;  // as a grasped child's solve (solve_grasped)
 }
 
 namespace {

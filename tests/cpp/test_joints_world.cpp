@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 using namespace handsim;
 
@@ -563,3 +565,38 @@ TEST_P(JointsWorldHand, PaperPipelineOpensTheLidLikeTheLeanOne) {
 }
 
 HANDSIM_BOTH_GRASP_RULES(JointsWorldHand);
+
+// The pinch shape swinging the lid 0.5 rad about the hinge in 1 s, then held still for 0.5 s, its index pads on
+// top of the lid and its thumb under the lip, both inside the lid (the tracked fingers of the pinch recordings,
+// past both faces): no grasp (the hand never closes), only the physical push's overlap removal moves the lid. Its
+// largest angle is the same at 30, 60 and 120 Hz within 2 deg (the judge's rate check). Before the hinge's
+// balance of pushes (docs/grasp.md "Why a push depends on the frame rate"): 44.35 / 29.44 / 26.00 deg.
+TEST(JointsWorld, LidPushedFromBothFacesSwingsAlikeAtEveryFrameRate) {
+  std::vector<double> largest;
+  for (int rate : {30, 60, 120}) {
+    WorldDef d;
+    d.push_model = PushModel::Wrap;
+    World world(d);
+    JewelryBoxDef def;
+    def.base_mass = 0;  // a fixed base keeps the test about the lid
+    const JewelryBox box = build_jewelry_box(world, def);
+    const HandId hand = world.add_hand(HandDef{});
+    const double dt = 1.0 / rate;
+    double most = 0, last = 0, still_jump = 0;  // still_jump: the largest change in a frame once the hand stopped
+    for (int i = 0; i <= int(1.5 * rate); ++i) {
+      const double swing = 0.5 * std::min(1.0, i * dt);
+      const Pose palm = box.lid_pinch_palm(world, Handedness::Right, swing);
+      world.step(dt, {{hand, make_hand_frame(Handedness::Right, palm, lid_pinch_shape())}});
+      ASSERT_FALSE(world.body_grasp(box.lid).grasped);
+      const double value = world.joint_state(box.hinge).value;
+      most = std::max(most, value);
+      if (i * dt > 1.0) still_jump = std::max(still_jump, std::abs(value - last));
+      last = value;
+    }
+    std::printf("lid pushed from both faces at %d Hz: largest %.2f deg, largest change in a frame after the hand "
+                "stopped %.2f deg\n", rate, most / kDeg, still_jump / kDeg);
+    largest.push_back(most);
+  }
+  const auto [lo, hi] = std::minmax_element(largest.begin(), largest.end());
+  EXPECT_LE(*hi - *lo, 2 * kDeg);
+}
