@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace handsim {
@@ -74,6 +76,19 @@ std::unique_ptr<btCollisionShape> make_shape(const ShapeDef& s, std::unique_ptr<
   return shape;
 }
 
+// Bit for bit (a skipped computation must be one whose result is already there, signed zeros included).
+uint64_t bits_of(double x) {
+  uint64_t u;
+  std::memcpy(&u, &x, sizeof u);
+  return u;
+}
+bool same_bits(const btVector3& a, const btVector3& b) {
+  return bits_of(a.x()) == bits_of(b.x()) && bits_of(a.y()) == bits_of(b.y()) && bits_of(a.z()) == bits_of(b.z());
+}
+bool same_bits(const btTransform& a, const btTransform& b) {
+  return same_bits(a.getOrigin(), b.getOrigin()) && same_bits(a.getBasis()[0], b.getBasis()[0]) &&
+         same_bits(a.getBasis()[1], b.getBasis()[1]) && same_bits(a.getBasis()[2], b.getBasis()[2]);
+}
 }  // namespace
 
 struct BulletBackend::Impl {
@@ -81,6 +96,13 @@ struct BulletBackend::Impl {
     std::unique_ptr<MeshStorage> mesh;
     std::unique_ptr<btCollisionShape> shape;
     std::unique_ptr<btRigidBody> body;
+    // The last change to this kinematic body was idle's save of it unmoved (transform and interpolation
+    // transform the same) over `saved_h`, in era `saved_era`, and it has been kept since (keep_kinematic): its
+    // velocities are those from its transform to itself, which the same save again would write (not exactly
+    // zero: the rotation's angle comes from an acos). move_kinematic, write and set_motion end it.
+    bool saved_unmoved = false;
+    double saved_h = 0;
+    uint64_t saved_era = 0;
   };
 
   btDefaultCollisionConfiguration config;
@@ -94,6 +116,7 @@ struct BulletBackend::Impl {
   Entry ground;
   bool woken = true;                 // see BulletBackend::woken
   std::vector<int> moved_kinematic;  // kinematic bodies moved since the last step or idle
+  uint64_t era = 0;  // counts Bullet's steps and restores, which change every body: a save of an older era is stale
 
   explicit Impl(const WorldDef& def) {
     world.setGravity(bt(def.gravity));
@@ -141,6 +164,17 @@ struct BulletBackend::Impl {
                               : motion == BodyMotion::Static  ? ISLAND_SLEEPING
                                                               : ACTIVE_TAG);
     body.updateInertiaTensor();
+  }
+
+  // saveKinematicState(h), skipped when it would write what the body holds already (Entry::saved_unmoved). A
+  // held lid is moved at a frame's first idle substep and kept at the others (replace_children): the second
+  // saves it unmoved, the rest skip.
+  void save_kinematic(Entry& e, double h) const {
+    if (e.saved_unmoved && e.saved_h == h && e.saved_era == era) return;
+    e.saved_unmoved = same_bits(e.body->getWorldTransform(), e.body->getInterpolationWorldTransform());
+    e.saved_h = h;
+    e.saved_era = era;
+    e.body->saveKinematicState(h);
   }
 
   // Wakes the dynamic bodies whose bounds touch `body`'s (Bullet's bounds carry its contact margin).
@@ -308,12 +342,14 @@ void BulletBackend::set_motion(int handle, BodyMotion motion, double mass) {
   // Bullet caches static/kinematic state in the broadphase filter, so re-add the body after the change.
   impl_->world.removeRigidBody(&body);
   Impl::apply_motion(body, motion, mass);
+  impl_->entries[handle].saved_unmoved = false;
   impl_->world.addRigidBody(&body);
   impl_->woken = true;
 }
 
 void BulletBackend::write(int handle, const Pose& pose, const Vec3& linear, const Vec3& angular) {
   btRigidBody& body = *impl_->entries[handle].body;
+  impl_->entries[handle].saved_unmoved = false;
   impl_->woken = true;
   if (body.isStaticObject()) {
     // A moved static body stays asleep (see apply_motion) with its bounds brought up to date; what rested
@@ -336,9 +372,13 @@ void BulletBackend::write(int handle, const Pose& pose, const Vec3& linear, cons
 }
 
 void BulletBackend::move_kinematic(int handle, const Pose& pose) {
-  impl_->entries[handle].body->setWorldTransform(bt(pose));
+  Impl::Entry& e = impl_->entries[handle];
+  e.body->setWorldTransform(bt(pose));
+  e.saved_unmoved = false;
   impl_->moved_kinematic.push_back(handle);
 }
+
+void BulletBackend::keep_kinematic(int handle) { impl_->moved_kinematic.push_back(handle); }
 
 void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const {
   const btRigidBody& body = *impl_->entries[handle].body;
@@ -354,6 +394,7 @@ bool BulletBackend::woken() const { return impl_->woken; }
 void BulletBackend::step(double h) {
   // maxSubSteps = 0: Bullet takes exactly one step of length h; the world does the substepping.
   impl_->world.stepSimulation(h, 0, h);
+  ++impl_->era;
   impl_->woken = false;
   impl_->moved_kinematic.clear();
 }
@@ -365,8 +406,8 @@ void BulletBackend::idle(double h) {
   std::sort(moved.begin(), moved.end());
   moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
   for (int handle : moved) {
-    btRigidBody* body = impl_->entries[handle].body.get();
-    if (body && body->isKinematicObject()) body->saveKinematicState(h);
+    Impl::Entry& e = impl_->entries[handle];
+    if (e.body && e.body->isKinematicObject()) impl_->save_kinematic(e, h);
   }
   // A kinematic body that did not move keeps its transform as the next start: nothing to save for it (its
   // velocity is recomputed by the next real step, which starts with the same save).
@@ -429,6 +470,7 @@ void BulletBackend::restore(const BackendState& s) {
   impl_->free_handles = s.free_handles;
   impl_->moved_kinematic = s.moved_kinematic;
   impl_->woken = s.woken;
+  ++impl_->era;
 }
 
 }  // namespace handsim

@@ -48,6 +48,9 @@ class BulletBackend {
   void write(int handle, const Pose& pose, const Vec3& linear, const Vec3& angular);
   // Move a kinematic body for the coming substep; Bullet derives its velocity from the change.
   void move_kinematic(int handle, const Pose& pose);
+  // move_kinematic to the pose the last one gave, which nothing has changed since (no step, write or restore):
+  // the same for Bullet, without converting the pose again, and idle may skip its unchanged save.
+  void keep_kinematic(int handle);
   void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
   // Whether Bullet still simulates a dynamic body; false once it has fallen asleep (at rest for Bullet's
   // deactivation time), until something wakes it (a write, a contact with a moving body).

@@ -453,7 +453,8 @@ Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j);
 void place_children(const WorldModel& model, const std::vector<Joint>& joints, std::vector<Body>& bodies,
                     BulletBackend& backend);
 // place_children again when nothing it reads has changed since it last ran (no coordinate, no parent moved): the
-// children's poses and velocities are what it would compute, so only Bullet's copies are set again, as it would.
+// children's poses and velocities are what it would compute, and Bullet's copies where it put them: Bullet is told
+// they stay there (keep_kinematic), which is what setting them again would tell it.
 void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
                       BulletBackend& backend);
 // Whether integrate_joints moves the hard joint `j` (its child not held, the joint not fixed), and any hard joint.

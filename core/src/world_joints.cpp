@@ -277,10 +277,7 @@ void place_children(const WorldModel& model, const std::vector<Joint>& joints, s
 
 void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
                       BulletBackend& backend) {
-  for (uint32_t k : model.joint_order) {
-    const Body& c = bodies[joints[k].child];
-    backend.move_kinematic(c.backend, c.pose);
-  }
+  for (uint32_t k : model.joint_order) backend.keep_kinematic(bodies[joints[k].child].backend);
 }
 
 // --- free dynamics of hard joints (one substep) ---

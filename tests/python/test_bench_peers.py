@@ -31,3 +31,14 @@ def test_the_cube_carry_pinch_grasps_under_wrap():
     cube = peers.HandsimCube(push_model=handsim.PushModel.WRAP)
     cube.build()  # raises when the pinch does not grasp
     assert np.linalg.norm(cube.offset) < 0.01
+
+
+def test_contact_changes():
+    # The still hold's contacts change depth by rounding only; the eased carry's all change (docs/performance.md)
+    doc = peers.contact_changes()
+    lid, = doc["scenes"]["lid_drag"]
+    assert lid["pairs"] == peers.FRAMES - 1 and lid["touching_median"] > 0
+    assert lid["largest_change_median_m"] < 1e-12
+    for r in doc["scenes"]["cube_carry"]:
+        assert r["all_changed_frames"] == r["pairs"] and r["largest_change_median_m"] > 1e-6
+    assert "cube_carry" in peers.contact_changes_table(doc)

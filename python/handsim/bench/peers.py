@@ -140,6 +140,7 @@ class HandsimLid:
             palm = box.lid_pinch_palm(world, R, _angles()[0])
             world.step(DT, {hand: handsim.make_hand_frame(R, palm, params=handsim.closing_grip(shape, k * DT))})
         self.world, self.box, self.frames = world, box, frames
+        self.hand, self.body = hand, box.lid  # the held body (contact_changes)
 
     def frame(self, i):
         self.world.step(DT, self.frames[i])
@@ -251,6 +252,7 @@ class HandsimCube:
         self.frames = [{hand: pinch(t, hold)} for t in self.targets]
         self.offset = np.array(world.body_pose(cube)[:3]) - start  # where the grasp holds it
         self.world, self.cube = world, cube
+        self.hand, self.body = hand, cube  # the held body (contact_changes)
 
     def frame(self, i):
         self.world.step(DT, self.frames[i])
@@ -650,6 +652,63 @@ def write_doc(result, docs):
     replace_section(Path(docs) / "performance.md", "peers", "\n".join(text))
 
 
+# --- how the held body's contacts change from frame to frame --------------------------------------------------
+#
+# The hold path (docs/grasp.md "The hold path") may carry a held body's contacts over from an earlier frame only
+# while they do not change. `contact_changes` measures, for handsim's frames of each scene, how many of the held
+# body's touching contacts change depth between consecutive frames and by how much: the figure that says
+# whether a hold could take an exact shortcut.
+
+def contact_changes():
+    """Per handsim engine of both scenes: over its frames, the held body's touching contacts (depth > 0) and,
+    of the particles touching in two consecutive frames, how many changed depth (any change) and the largest
+    change. Reading contacts changes no state (docs/grasp.md), so these are the frames the other modes run."""
+    result = {"frames": FRAMES, "scenes": {}}
+    for scene in ("lid_drag", "cube_carry"):
+        rows = []
+        for label, make, _ in engines(scene):
+            if not label.startswith("handsim"):
+                continue
+            engine = make()
+            engine.build()
+            touching, common, changed, largest, previous = [], [], [], [], None
+            for i in range(FRAMES):
+                engine.frame(i)
+                particles, _, _, depths = engine.world.body_contacts(engine.body, engine.hand)
+                now = {int(p): float(d) for p, d in zip(particles, depths) if d > 0}
+                touching.append(len(now))
+                if previous is not None:
+                    both = now.keys() & previous.keys()
+                    change = [abs(now[k] - previous[k]) for k in both]
+                    common.append(len(both))
+                    changed.append(sum(c > 0 for c in change))
+                    largest.append(max(change, default=0.0))
+                previous = now
+            rows.append({"engine": label, "touching_median": float(np.median(touching)),
+                         "touching_min": min(touching), "touching_max": max(touching),
+                         "common_median": float(np.median(common)), "changed_median": float(np.median(changed)),
+                         "all_changed_frames": sum(c == n and n > 0 for c, n in zip(changed, common)),
+                         "none_changed_frames": sum(c == 0 for c in changed), "pairs": len(common),
+                         "largest_change_median_m": float(np.median(largest)),
+                         "largest_change_max_m": float(max(largest))})
+        result["scenes"][scene] = rows
+    return result
+
+
+def contact_changes_table(result):
+    headers = ["scene", "engine", "touching (median, min..max)", "touching in both frames (median)",
+               "of those changed depth (median)", "frame pairs: all changed / none changed / all",
+               "largest change um (median, max)"]
+    body = []
+    for scene, rows in result["scenes"].items():
+        for r in rows:
+            body.append([scene, r["engine"], f"{r['touching_median']:g} ({r['touching_min']}..{r['touching_max']})",
+                         f"{r['common_median']:g}", f"{r['changed_median']:g}",
+                         f"{r['all_changed_frames']} / {r['none_changed_frames']} / {r['pairs']}",
+                         f"{r['largest_change_median_m'] * 1e6:.3g}, {r['largest_change_max_m'] * 1e6:.3g}"])
+    return format_table(headers, body)
+
+
 # --- instructions per frame (callgrind) ----------------------------------------------------------------------
 #
 # On a machine shared by other jobs wall-clock times move by up to 2x between runs, and the ratios of this
@@ -733,14 +792,20 @@ def write_count_doc(result, docs):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="python -m handsim.bench.peers",
-                                     description="instructions per frame of the peers benchmark's engines")
+                                     description="instructions per frame of the peers benchmark's engines, and how "
+                                                 "handsim's held-body contacts change from frame to frame")
     parser.add_argument("--count", action="store_true", help="count every engine's instructions per frame")
+    parser.add_argument("--contact-changes", action="store_true",
+                        help="per handsim engine: the held body's touching contacts and how their depths change "
+                             "between consecutive frames")
     parser.add_argument("--frames", nargs=2, metavar=("SCENE", "ENGINE"), help="run one engine's frames only")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--doc", type=Path, default=None, metavar="DIR", help="docs folder to write the table into")
     args = parser.parse_args(argv)
     if args.frames:
         _frames_only(args.frames[0], args.frames[1], args.repeats)
+    elif args.contact_changes:
+        print(contact_changes_table(contact_changes()))
     elif args.count:
         if args.doc is not None and not args.doc.is_dir():
             parser.error(f"--doc: {args.doc} is not a folder")
@@ -749,7 +814,7 @@ def main(argv=None):
         if args.doc:
             write_count_doc(result, args.doc)
     else:
-        parser.error("give --count or --frames")
+        parser.error("give --count, --contact-changes or --frames")
 
 
 if __name__ == "__main__":
