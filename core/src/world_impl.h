@@ -120,13 +120,21 @@ struct HandSlotModel {
   HandReach reach;  // the coarse bounds of the lazy particles (below), built once from the model
 };
 
+// Whether a world's hands keep their bones' history (HandSlotState::articulation): the squeeze rule reads it over the
+// closing window, Wrap's press the closing fingers' own speed. One test, so that what records it (pose_hands) and
+// what saves and hashes it (world_state.cpp) agree: a restored Wrap world whose history was not saved stepped into
+// a history newer than its clock ("time: must increase").
+inline bool keeps_articulation(const WorldDef& def) {
+  return def.grasp.squeeze_distance > 0 || def.push_model == PushModel::Wrap;
+}
+
 // A hand's state: the tracked frame's bones and palm, the histories the grasp rules read, and the particle
 // caches (skinned from the bones, deformed from the contacts; saved so a restored world reads back the same).
 struct HandSlotState {
   HandState state;
   HandMotionHistory history;
   GripHistory grip;  // grip span and palm over the last closing_window_s (GraspSettings::closing_distance)
-  ArticulationHistory articulation;  // bones over the last closing_window_s (GraspSettings::squeeze_distance)
+  ArticulationHistory articulation;  // bones over the last closing_window_s, when keeps_articulation(def)
   Pose palm;
   bool has_pose = false;  // a tracked frame has been seen
   // Lazy particles: a hand whose coarse bounds (from the bones, before skinning) are far from every body skips

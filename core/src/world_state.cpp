@@ -267,9 +267,8 @@ template <class V, class Face> void visit_face(V& v, Face& f, uint32_t particles
 }
 
 // One body's, joint's and hand's state (world_impl.h: BodyState, JointSlotState, HandSlotState); S is the state
-// or its const, given explicitly (Const below) so that these see nothing of the slot's model. `particles` and `groups` bound the hand's indices (from its model); `squeeze` is whether the
-// squeeze rule keeps its history (GraspSettings::squeeze_distance > 0), so a world without it saves and hashes
-// as before.
+// or its const, given explicitly (Const below) so that these see nothing of the slot's model. `particles` and `groups` bound the hand's indices (from its model); `articulation` is
+// keeps_articulation(def), so a world without that history saves and hashes as before.
 template <class W, class T> using Const = std::conditional_t<std::is_const_v<W>, const T, T>;
 
 template <class S, class V> void visit_body(S& b, V& v) {
@@ -301,14 +300,14 @@ template <class S, class V> void visit_joint(S& j, V& v) {
   v.enumeration(j.last.termination, JointTermination::AtLimit);  // (its wall time is no state)
 }
 
-template <class S, class V> void visit_hand(S& h, V& v, uint32_t particles, uint32_t groups, bool squeeze) {
+template <class S, class V> void visit_hand(S& h, V& v, uint32_t particles, uint32_t groups, bool articulation) {
   v.state(h.state.tracked);
   v.state(h.has_pose);
   v.state(h.palm);
   for (auto& bone : h.state.bones) v.state(bone);
   std::remove_const_t<std::remove_reference_t<decltype(h.history)>>::visit_state(h.history, v);
   std::remove_const_t<std::remove_reference_t<decltype(h.grip)>>::visit_state(h.grip, v);
-  if (squeeze) std::remove_const_t<std::remove_reference_t<decltype(h.articulation)>>::visit_state(h.articulation, v);
+  if (articulation) std::remove_const_t<std::remove_reference_t<decltype(h.articulation)>>::visit_state(h.articulation, v);
   // Particles: skinned from the bones (lazily), deformed from the contacts of the frame. Caches.
   v.points(h.state.tracked_positions, particles);
   v.points(h.state.deformed_positions, particles);
@@ -342,7 +341,7 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
   for (auto& h : w.hands)
     if (h.alive)
       visit_hand<Const<W, HandSlotState>>(h, v, uint32_t(h.model->particle_count()), uint32_t(h.model->particle_skin.groups.size()),
-                 w.def.grasp.squeeze_distance > 0);
+                 keeps_articulation(w.def));
   v.pairs(s.pairs, [&](const auto& key, auto& pair) {
     const uint32_t particles = uint32_t(w.hands[key.first].model->particle_count());
     std::remove_const_t<std::remove_reference_t<decltype(pair.tracker)>>::visit_state(pair.tracker, v);

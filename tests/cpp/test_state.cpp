@@ -331,28 +331,49 @@ TEST(State, ForgedBytesAreRefusedOrStepCleanly) {
   EXPECT_GT(refused, 0);
 }
 
-// With GraspSettings::squeeze_distance on, the hand's articulation history decides when a grasp may begin, so it
-// is saved: a world restored from one whose hand curled differently has the saver's state, also a frame later.
-TEST(State, SqueezeHistoryIsSavedAndRestored) {
-  auto hand_after = [](double squeeze, double first_curl) {
-    WorldDef def;
-    def.grasp.squeeze_distance = squeeze;
+// The hand's articulation history is kept under the squeeze rule (it decides when a grasp may begin) and under
+// PushModel::Wrap (the closing fingers' own speed presses), so it is saved: a world restored from one whose hand
+// curled differently has the saver's state, also a frame later; and a world rewound to its own earlier save steps
+// on as it did the first time (under Wrap it refused, "time: must increase", while the history went unsaved).
+static void expect_articulation_saved(WorldDef def) {
+  auto curl = [](double c) {
+    HandPoseParams p;
+    p.curl = {0, c, 0, 0, 0};
+    return make_hand_frame(Handedness::Right, Pose{}, p);
+  };
+  auto hand_after = [&](double first_curl) {
     auto w = std::make_unique<World>(def);
     const HandId hand = w->add_hand(HandDef{});
-    for (int i = 0; i < 10; ++i) {
-      HandPoseParams p;
-      p.curl = {0, i < 5 ? first_curl : 0.5, 0, 0, 0};
-      w->step(1.0 / 60, {{hand, make_hand_frame(Handedness::Right, Pose{}, p)}});
-    }
+    for (int i = 0; i < 10; ++i) w->step(1.0 / 60, {{hand, curl(i < 5 ? first_curl : 0.5)}});
     return w;
   };
-  auto a = hand_after(0.01, 0.0);
-  auto b = hand_after(0.01, 0.3);
-  b->restore_state(a->save_state());
+  auto a = hand_after(0.0);
+  auto b = hand_after(0.3);
+  const std::vector<uint8_t> saved = a->save_state();
+  b->restore_state(saved);
   EXPECT_EQ(a->state_hash(), b->state_hash());
-  HandPoseParams p;
-  p.curl = {0, 0.6, 0, 0, 0};
-  a->step(1.0 / 60, {{a->hands().front(), make_hand_frame(Handedness::Right, Pose{}, p)}});  // each world's one hand
-  b->step(1.0 / 60, {{b->hands().front(), make_hand_frame(Handedness::Right, Pose{}, p)}});
-  EXPECT_EQ(a->state_hash(), b->state_hash());
+  std::vector<uint64_t> first;
+  for (int i = 0; i < 5; ++i) {
+    a->step(1.0 / 60, {{a->hands().front(), curl(0.5 + 0.05 * i)}});  // each world's one hand
+    b->step(1.0 / 60, {{b->hands().front(), curl(0.5 + 0.05 * i)}});
+    EXPECT_EQ(a->state_hash(), b->state_hash());
+    first.push_back(a->state_hash());
+  }
+  a->restore_state(saved);
+  for (int i = 0; i < 5; ++i) {
+    ASSERT_NO_THROW(a->step(1.0 / 60, {{a->hands().front(), curl(0.5 + 0.05 * i)}})) << "the rewound world steps on";
+    EXPECT_EQ(a->state_hash(), first[size_t(i)]);
+  }
+}
+
+TEST(State, SqueezeHistoryIsSavedAndRestored) {
+  WorldDef def;
+  def.grasp.squeeze_distance = 0.01;
+  expect_articulation_saved(def);
+}
+
+TEST(State, WrapHistoryIsSavedAndRestored) {
+  WorldDef def;
+  def.push_model = PushModel::Wrap;
+  expect_articulation_saved(def);
 }
