@@ -133,6 +133,13 @@ Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j) {
   return p;
 }
 
+namespace {
+// Where a hinge's or slider's child is at its coordinate `value` (an angle or an offset) on the parent pose `parent`.
+Pose coordinate_child_pose(const Joint& j, const Pose& parent, double value) {
+  return j.type == JointType::Hinge ? hinge_child_pose(j.hinge, parent, value) : slider_child_pose(j.slider, parent, value);
+}
+}  // namespace
+
 // --- adding and removing ---
 
 namespace {
@@ -429,9 +436,9 @@ void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& 
     }
     j.rotation = j.solved_rotation;  // the solved rotation itself (re-deriving it from spin * dt would round)
   } else {
-    const bool hinge = j.type == JointType::Hinge, slider = j.type == JointType::Slider;
-    const Pose after = hinge ? hinge_child_pose(j.hinge, p, j.last.value) : slider_child_pose(j.slider, p, j.last.value);
-    if ((hinge || slider) && stopped_by_parent(bodies, j, joint_child_pose(bodies, j), after)) {
+    const bool coordinate = j.type == JointType::Hinge || j.type == JointType::Slider;
+    const Pose now = joint_child_pose(bodies, j);
+    if (coordinate && stopped_by_parent(bodies, j, now, coordinate_child_pose(j, p, j.last.value))) {
       j.rate = 0;
       return;
     }
@@ -457,8 +464,8 @@ void shift_coordinate(const std::vector<Body>& bodies, Joint& j, double step) {
   double value = j.value + step, rate = 0;  // a displacement gives no rate
   clamp_coordinate(value, rate, hinge ? j.hinge.lower : j.slider.lower, hinge ? j.hinge.upper : j.slider.upper);
   const Pose p = parent_pose(bodies, j);
-  const Pose after = hinge ? hinge_child_pose(j.hinge, p, value) : slider_child_pose(j.slider, p, value);
-  if (!stopped_by_parent(bodies, j, now, after)) j.value = value;  // as a grasped child's solve (solve_grasped)
+  // As a grasped child's solve (solve_grasped): the parent's surface stops the step.
+  if (!stopped_by_parent(bodies, j, now, coordinate_child_pose(j, p, value))) j.value = value;
 }
 
 namespace {
