@@ -297,6 +297,24 @@ int newest_in_span(int count, double span, const TimeOf& time_of) {
   while (n < count && newest - time_of(n - 1) < span - kTimestampResolution) ++n;
   return n;
 }
+
+// A least-squares slope against time over the samples of ages 0..n-1 (time_of(age), age 0 the newest): calls
+// add(age, tau) with each sample's time centred on their mean and returns the sum of tau^2, so the slope of any
+// x is the sum of tau x_age that `add` gathers divided by it. One place for the palm's velocities and a point's.
+template <class TimeOf, class Add>
+double centred_times(int n, const TimeOf& time_of, const Add& add) {
+  const double newest = time_of(0);
+  double sum = 0;
+  for (int k = 0; k < n; ++k) sum += time_of(k) - newest;
+  const double mean = sum / n;
+  double spread = 0;
+  for (int k = 0; k < n; ++k) {
+    const double tau = time_of(k) - newest - mean;
+    spread += tau * tau;
+    add(k, tau);
+  }
+  return spread;
+}
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------------------
@@ -318,21 +336,14 @@ Vec3 ArticulationHistory::point_velocity(const HandModel& model, int particle, c
                                          int most) const {
   const int count = std::min(static_cast<int>(samples_.size()), most);
   if (count < 2) return Vec3::Zero();
-  const Sample& newest = samples_.back();
-  auto time_of = [&](int age) { return samples_[samples_.size() - 1 - static_cast<size_t>(age)].time; };
-  const int n = newest_in_span(count, span, time_of);
+  auto sample = [&](int age) -> const Sample& { return samples_[samples_.size() - 1 - static_cast<size_t>(age)]; };
+  auto time_of = [&](int age) { return sample(age).time; };
   const int bone = main_bone(model, particle);
-  const Vec3 rest = to_bind(newest.bones[bone], position);  // the point in its bone's bind frame
-  double sum = 0;
-  for (int k = 0; k < n; ++k) sum += time_of(k) - newest.time;
-  const double mean = sum / n;
-  double spread = 0;
+  const Vec3 rest = to_bind(sample(0).bones[bone], position);  // the point in its bone's bind frame
   Vec3 slope = Vec3::Zero();
-  for (int k = 0; k < n; ++k) {
-    const double tau = time_of(k) - newest.time - mean;
-    spread += tau * tau;
-    slope += tau * (to_world(samples_[samples_.size() - 1 - static_cast<size_t>(k)].bones[bone], rest) - position);
-  }
+  const double spread = centred_times(newest_in_span(count, span, time_of), time_of, [&](int age, double tau) {
+    slope += tau * (to_world(sample(age).bones[bone], rest) - position);
+  });
   return slope / spread;
 }
 
@@ -412,20 +423,14 @@ void HandMotionHistory::refresh_velocities() {
     return;
   }
   const Sample& newest = sample(0);
-  const int n = samples_in_span();
-  double sum = 0;
-  for (int k = 0; k < n; ++k) sum += sample(k).time - newest.time;
-  const double mean = sum / n;
   const Quat newest_inv = newest.pose.orientation.conjugate();
-  double spread = 0;
   Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
-  for (int k = 0; k < n; ++k) {
-    const Sample& s = sample(k);
-    const double tau = s.time - newest.time - mean;
-    spread += tau * tau;
-    linear += tau * (s.pose.position - newest.pose.position);
-    angular += tau * rotation_vector(Quat(s.pose.orientation * newest_inv));
-  }
+  const double spread =
+      centred_times(samples_in_span(), [this](int age) { return sample(age).time; }, [&](int age, double tau) {
+        const Sample& s = sample(age);
+        linear += tau * (s.pose.position - newest.pose.position);
+        angular += tau * rotation_vector(Quat(s.pose.orientation * newest_inv));
+      });
   linear_ = linear / spread;
   angular_ = angular / spread;
 }
