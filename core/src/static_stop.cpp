@@ -253,7 +253,6 @@ void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, cons
 // ways, as for the static stops, since a lid's points lie on its own corners and face centres, none of them on the
 // base's front edge a lid turning down past shut meets first. The joints' stages have no scratch of their own;
 // one per thread keeps the step free of allocations once grown.
-namespace {
 double depth_in(const Body& child, const Pose& child_pose, const Body& parent) {
   thread_local StaticStopScratch scratch;
   double depth = 0;
@@ -266,13 +265,37 @@ double depth_in(const Body& child, const Pose& child_pose, const Body& parent) {
   for (const ParticleContact& c : scratch.contacts) depth = std::max(depth, c.depth);
   return depth;
 }
+
+namespace {
+bool convex_polytope(const ShapeDef& s) { return s.type == ShapeType::Box || s.type == ShapeType::ConvexHull; }
 }  // namespace
+
+// A box's or hull's shape points have radius 0 and lie in the shape (a box's on its surface, a hull's at its
+// vertices). A point at depth d in a box or hull is at distance d from its nearest face plane, so the ball of
+// radius d about it lies inside the polytope and so inside its world box; the point also lies in its own body's
+// world box. So on every axis each of the two boxes reaches at least d past the near side of the other, and where
+// one of them reaches less than `depth` on some axis, no point of either lies deeper than that in the other. A lid
+// on its hinge at its base's top edge reaches 0 past the base's top: its frames need no collision. 1 nm allows for
+// the rounding of the boxes and the points (~1e-16 m on coordinates of metres); other shapes (spheres and capsules
+// whose points have a radius, meshes) always may.
+bool may_lie_deeper(const Body& child, const Pose& child_pose, const Body& parent, double depth) {
+  if (!convex_polytope(child.prepared.shape) || !convex_polytope(parent.prepared.shape)) return true;
+  constexpr double kRounding = 1e-9;
+  Vec3 clo, chi, plo, phi;
+  local_box_in_world(child.prepared.local_lo, child.prepared.local_hi, child_pose, clo, chi);
+  local_box_in_world(parent.prepared.local_lo, parent.prepared.local_hi, parent.pose, plo, phi);
+  const Vec3 reach = (phi - clo).cwiseMin(chi - plo);
+  return reach.minCoeff() >= depth - kRounding;
+}
 
 bool stopped_by_parent(const std::vector<Body>& bodies, const Joint& j, const Pose& before, const Pose& after) {
   if (j.parent == kWorldParent) return false;
   const Body& child = bodies[j.child];
   const Body& parent = bodies[j.parent];
-  return depth_in(child, after, parent) > kStaticSlop && depth_in(child, before, parent) <= kStaticSlop;
+  auto inside = [&](const Pose& pose) {
+    return may_lie_deeper(child, pose, parent, kStaticSlop) && depth_in(child, pose, parent) > kStaticSlop;
+  };
+  return inside(after) && !inside(before);
 }
 
 // Where the held body `b` is this frame: palm * T_rel of its primary hand, stopped by static geometry. A hand more

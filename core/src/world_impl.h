@@ -474,6 +474,11 @@ bool joints_integrate(const WorldModel& model, const std::vector<Joint>& joints,
 // base. A child already inside its parent's shape is not stopped: that shape is then not the surface that bounds
 // it (a drawer sliding in a cabinet given as a solid box). Joints to the world are not stopped. (static_stop.cpp)
 bool stopped_by_parent(const std::vector<Body>& bodies, const Joint& j, const Pose& before, const Pose& after);
+// The deepest of the child's shape points (at `child_pose`) in `parent`, and of the parent's in the child.
+double depth_in(const Body& child, const Pose& child_pose, const Body& parent);
+// False when no shape point of either body can lie deeper than `depth` in the other (a bound from their world
+// boxes, for boxes and hulls; always true for other shapes): depth_in is then at most `depth` without being made.
+bool may_lie_deeper(const Body& child, const Pose& child_pose, const Body& parent, double depth);
 // One substep of the free hard joints (not held): gravity (none for a supported child), damping, limits, the
 // parent's surface.
 void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const std::vector<Body>& bodies, double h);

@@ -2,12 +2,14 @@
 // analytic dynamics, the micro-simulator moves a grasped lid, bad joint definitions are rejected.
 #include "grasp_rules.h"
 #include "handsim/scenes.h"
+#include "world_impl.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 using namespace handsim;
 
@@ -322,6 +324,51 @@ TEST(JointsWorld, ChildOutsideItsParentStopsOnItsSurfaceAndOneInsideSlidesThroug
   EXPECT_GE(fell, 0.0);
   EXPECT_LE(fell, 0.0005);  // at most the stop's 0.5 mm slop into the top
   EXPECT_EQ(world.joint_state(inside).value, -0.5);  // fell through to its limit
+}
+
+// stopped_by_parent skips colliding the two shapes where their world boxes show that no point can lie deeper than
+// the slop (may_lie_deeper): the bound must never skip a depth beyond it. Boxes and a hull (a wedge) posed at
+// random about a parent box and a parent hull, at three depths; and a lid on its hinge at the base's top edge,
+// at every angle, is skipped.
+TEST(JointsWorld, TheWorldBoxBoundNeverSkipsAPointDeeperThanItsDepth) {
+  auto body = [](const ShapeDef& shape) {
+    Body b;
+    b.shape = shape;
+    b.prepared = prepare_shape(shape);
+    return b;
+  };
+  const ShapeDef wedge = ShapeDef::convex_hull({{-0.03, 0, -0.02}, {0.03, 0, -0.02}, {-0.03, 0, 0.02},
+                                                {0.03, 0, 0.02}, {-0.03, 0.04, -0.02}, {0.03, 0.04, -0.02}});
+  const std::vector<Body> parents = {body(ShapeDef::box(Vec3(0.09, 0.04, 0.07))), body(wedge)};
+  const std::vector<Body> children = {body(ShapeDef::box(Vec3(0.09, 0.0075, 0.0675))), body(wedge)};
+  std::mt19937 rng(25);
+  std::uniform_real_distribution<double> offset(-0.12, 0.12), unit(-1, 1);
+  int skipped = 0, deeper = 0;
+  for (const Body& parent : parents)
+    for (const Body& child : children)
+      for (int i = 0; i < 2000; ++i) {
+        const Pose pose{Vec3(offset(rng), offset(rng), offset(rng)),
+                        Quat(unit(rng), unit(rng), unit(rng), unit(rng)).normalized()};
+        const double depth = depth_in(child, pose, parent);
+        for (double bound : {0.0, 0.0005, 0.003}) {
+          deeper += depth > bound;
+          if (may_lie_deeper(child, pose, parent, bound)) continue;
+          ++skipped;
+          EXPECT_LE(depth, bound) << "parent " << int(parent.shape.type) << " child " << int(child.shape.type);
+        }
+      }
+  EXPECT_GT(skipped, 1000);
+  EXPECT_GT(deeper, 1000);
+  // The jewelry box's lid hinged on its base's back top edge (the base's top at y = 0.04, the hinge along x at
+  // z = -0.07): it meets the base at the hinge line only, opened or not.
+  const Body& base = parents[0];
+  const Body& lid = children[0];
+  for (double angle = 0; angle <= 90 * kDeg; angle += 10 * kDeg) {
+    const Quat open(Eigen::AngleAxisd(-angle, Vec3::UnitX()));
+    const Vec3 hinge(0, 0.04, -0.07);
+    const Pose pose{hinge + open * Vec3(0, 0.0075, 0.0675), open};
+    EXPECT_FALSE(may_lie_deeper(lid, pose, base, 0.0005)) << angle;
+  }
 }
 
 TEST(JointsWorld, BallJointSettlesOnItsConeWhenGravityPullsOutside) {
