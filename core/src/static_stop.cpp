@@ -30,6 +30,9 @@ constexpr int kPasses = 8;
 // a body lifted clear by more than this is in the air. A point this near a surface but not on it only stops the
 // body from being pushed into the surface by that much, which the surface would do a millimetre later anyway.
 constexpr double kSupportGap = 0.001;
+// What the bounds below allow for the rounding of world boxes and shape points: 1 nm, ~1e7 times the rounding of
+// coordinates of metres (~1e-16 m) and 1/500,000 of the slop.
+constexpr double kRounding = 1e-9;
 
 // Points that stand for a shape, with the radius of their spheres: a box's corners, edge midpoints and face
 // centres (a table edge passing under the middle of a held box's face meets a face centre); a sphere's centre;
@@ -78,6 +81,8 @@ Vec3 satisfy(const std::vector<StaticStop>& stops) {
   return t;
 }
 
+}  // namespace
+
 // Every way `held` at `pose` is inside static geometry: a direction to push it and how deep it is in.
 void static_stops(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                   StaticStopScratch& scratch, const Body& held, const Pose& pose, std::vector<StaticStop>& out) {
@@ -119,11 +124,29 @@ void static_stops(const WorldDef& def, const std::vector<Body>& bodies, const Bo
   }
 }
 
+// Whether `held` at `pose` may lie deeper than the slop in static geometry: its world box, which holds its shape
+// points with their spheres, reaches more than the slop below the ground's surface or overlaps a static body's box.
+// Where it does neither every stop is within the slop, which satisfy leaves alone, so the push is zero without
+// making the shape points (a body carried in the air, or resting on the ground within the slop).
+bool may_meet_static(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                     StaticStopScratch& scratch, const Body& held, const Pose& pose) {
+  Vec3 lo, hi;
+  local_box_in_world(held.prepared.local_lo, held.prepared.local_hi, pose, lo, hi);
+  if (def.ground && lo.y() < def.ground_height - kStaticSlop + kRounding) return true;
+  boxes.bodies_near(lo, hi, 0, &scratch.near);
+  return std::any_of(scratch.near.begin(), scratch.near.end(), [&](uint32_t si) {
+    return bodies[si].alive && bodies[si].declared == BodyMotion::Static;
+  });
+}
+
+namespace {
+
 // The translation that takes `held` at `pose` out of static geometry (zero when it is not in deeper than the slop).
 Vec3 static_push(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                  StaticStopScratch& scratch, const Body& held, const Pose& pose) {
   std::vector<StaticStop>& stops = scratch.stops;
   Vec3 total = Vec3::Zero();
+  if (!may_meet_static(def, bodies, boxes, scratch, held, pose)) return total;
   for (int q = 0; q < kQueries; ++q) {
     static_stops(def, bodies, boxes, scratch, held, {pose.position + total, pose.orientation}, stops);
     const Vec3 t = satisfy(stops);
@@ -275,12 +298,10 @@ bool convex_polytope(const ShapeDef& s) { return s.type == ShapeType::Box || s.t
 // radius d about it lies inside the polytope and so inside its world box; the point also lies in its own body's
 // world box. So on every axis each of the two boxes reaches at least d past the near side of the other, and where
 // one of them reaches less than `depth` on some axis, no point of either lies deeper than that in the other. A lid
-// on its hinge at its base's top edge reaches 0 past the base's top: its frames need no collision. 1 nm allows for
-// the rounding of the boxes and the points (~1e-16 m on coordinates of metres); other shapes (spheres and capsules
-// whose points have a radius, meshes) always may.
+// on its hinge at its base's top edge reaches 0 past the base's top: its frames need no collision. Other shapes
+// (spheres and capsules whose points have a radius, meshes) always may.
 bool may_lie_deeper(const Body& child, const Pose& child_pose, const Body& parent, double depth) {
   if (!convex_polytope(child.prepared.shape) || !convex_polytope(parent.prepared.shape)) return true;
-  constexpr double kRounding = 1e-9;
   Vec3 clo, chi, plo, phi;
   local_box_in_world(child.prepared.local_lo, child.prepared.local_hi, child_pose, clo, chi);
   local_box_in_world(parent.prepared.local_lo, parent.prepared.local_hi, parent.pose, plo, phi);

@@ -535,6 +535,14 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
 // `pushed`. `b` is one of `bodies`, whose static ones it reads through the broadphase.
 Pose held_pose(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                const std::vector<HandSlot>& hands, StaticStopScratch& scratch, Body& b, Vec3* pushed = nullptr);
+// Every way `held` at `pose` is inside static geometry, the ground and the bodies of mass 0: a direction to push it
+// and how deep it is in (`out`). held_pose pushes it out of those deeper than StaticStop's slop (0.5 mm).
+void static_stops(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                  StaticStopScratch& scratch, const Body& held, const Pose& pose, std::vector<StaticStop>& out);
+// False when `held` at `pose` cannot be deeper than the slop in static geometry (a bound from its world box):
+// static_stops would find only stops within the slop, which push nothing.
+bool may_meet_static(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
+                     StaticStopScratch& scratch, const Body& held, const Pose& pose);
 // Where `b` rests on static geometry (within 1 mm of the ground or a body of mass 0): contacts for skin_press that
 // push the body out of the support and never pull, unbounded, hand_velocity zero (the support does not move), with
 // the two surfaces' combined friction (PushModel::Physical: the support bears the hand's press).
