@@ -312,19 +312,21 @@ HandReach build_hand_reach(const HandModel& model) {
   return r;
 }
 
+// The box of the ball's centres under the bones, grown by r once at the end: rounding is monotonic, so the least
+// of the rounded x - r is the rounded least x - r, the same bits as growing each centre, in locals the compiler
+// keeps in registers (box may alias the bones for all it knows).
 void coarse_bounds(const SkinGroup& group, const Vec3& c, double r,
                    const std::array<BoneTransform, kHandJointCount>& bones, double* box) {
-  for (int d = 0; d < 3; ++d) {
-    box[d] = std::numeric_limits<double>::infinity();
-    box[3 + d] = -std::numeric_limits<double>::infinity();
-  }
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (int k = 0; k < group.count; ++k) {
     const BoneTransform& B = bones[group.bones[k]];
     const Vec3 x = B.leftCols<3>() * c + B.col(3);
-    for (int d = 0; d < 3; ++d) {
-      box[d] = std::min(box[d], x[d] - r);
-      box[3 + d] = std::max(box[3 + d], x[d] + r);
-    }
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  for (int d = 0; d < 3; ++d) {
+    box[d] = lo[d] - r;
+    box[3 + d] = hi[d] + r;
   }
 }
 
