@@ -389,7 +389,13 @@ Pose moved_out(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint
 // - no displacement: the bone's overlap is what the tracked hand, which nothing stops, passes into a body its
 //   support and friction hold against the pulp's bounded force; pushed out kinematically it went into the support
 //   and Bullet pushed it back into the hand every frame (the first touch's creep, a base shoved off its table).
-// Jointed children rest on their joint, not on static geometry: they are pushed as free bodies are.
+// Jointed children rest on their joint, not on static geometry: they are pushed as free bodies are, in the world
+// (the hands' velocities are the world's, and the child's own is its parent's rigid motion plus its joint's:
+// place_children), from where the joint puts them on their parent as it is now. Only the motion relative to the
+// parent is the joint's: the parent's rigid motion at the child comes off before the projection, which measures the
+// child against the parent where it stands. (Projected whole, a parent's motion moved the joint: a base held by a
+// jittering hand, 0.55 rad/s about the vertical, turned the lid it carried at 100 deg/s about its hinge,
+// docs/grasp.md "Under Wrap".)
 void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
                    const BodyBoxes& boxes, PoseFitScratch& scratch, Body& b, double dt) {
   std::vector<SkinContact>& pressed = scratch.pressed;
@@ -398,12 +404,19 @@ void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<J
   support.clear();
   if (!b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, support);
   const bool displaced = support.empty() && !scratch.overlap.empty();
-  const Pose from = displaced ? moved_out(def, bodies, joints, scratch, b, inverse, dt) : b.pose;
+  const Pose from = displaced    ? moved_out(def, bodies, joints, scratch, b, inverse, dt)
+                    : b.jointed() ? joint_child_pose(bodies, joints[b.hard_joint])
+                                  : b.pose;
   const Vec3 weight = def.gravity * dt;
   pressed.insert(pressed.end(), support.begin(), support.end());
-  const BodyVelocity v = support.empty() ? skin_press(pressed, inverse, {b.linear, b.angular})
-                                         : skin_press(pressed, inverse, {b.linear + weight, b.angular}, kSupportSweeps,
-                                                      kSupportSettled);
+  BodyVelocity v = support.empty() ? skin_press(pressed, inverse, {b.linear, b.angular})
+                                   : skin_press(pressed, inverse, {b.linear + weight, b.angular}, kSupportSweeps,
+                                                kSupportSettled);
+  if (b.jointed()) {
+    const BodyVelocity carried = parent_motion(bodies, joints[b.hard_joint], from.position);
+    v.linear -= carried.linear;
+    v.angular -= carried.angular;
+  }
   push_touched_body(def, bodies, joints, backend, b, from, v.linear, v.angular, dt);
 }
 

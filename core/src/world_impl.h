@@ -485,6 +485,9 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
 // Eq. 2's motion of a pushed child (`simulated`, where the push would put it) projected onto its joint: the
 // coordinate's rate that gets there over dt, and the solve in the joint's report.
 void project_push(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
+// The rigid motion `j`'s parent gives a point of its child at `point`: the parent's angular velocity, and its linear
+// velocity carried to `point` (zero for a joint to the world). A child moves by it plus its joint's own motion.
+BodyVelocity parent_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point);
 // How far `point`, on the child of a hinge or slider, moves per unit of the joint's coordinate (hinge: the axis
 // crossed with the point's arm from the pivot, m/rad; slider: the unit axis); zero for ball and fixed joints.
 Vec3 coordinate_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point);

@@ -253,12 +253,8 @@ void place_children(const WorldModel& model, const std::vector<Joint>& joints, s
     const Pose p = parent_pose(bodies, j);
     c.pose = joint_child_pose(bodies, j);
     // The child's velocity: the parent's rigid motion plus the joint's own.
-    Vec3 v = Vec3::Zero(), w = Vec3::Zero();
-    if (j.parent != kWorldParent) {
-      const Body& pb = bodies[j.parent];
-      w = pb.angular;
-      v = pb.linear + pb.angular.cross(c.pose.position - pb.pose.position);
-    }
+    const BodyVelocity carried = parent_motion(bodies, j, c.pose.position);
+    Vec3 v = carried.linear, w = carried.angular;
     switch (j.type) {
       case JointType::Hinge: {
         const Vec3 a = p.orientation * j.hinge.axis_parent;
@@ -444,6 +440,12 @@ void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& 
     }
     j.value = j.last.value;
   }
+}
+
+BodyVelocity parent_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point) {
+  if (j.parent == kWorldParent) return {};
+  const Body& pb = bodies[j.parent];
+  return {pb.linear + pb.angular.cross(point - pb.pose.position), pb.angular};
 }
 
 Vec3 coordinate_motion(const std::vector<Body>& bodies, const Joint& j, const Vec3& point) {

@@ -155,6 +155,20 @@ def test_a_rule_replaces_the_grasp_settings_and_the_push_but_not_the_conditions_
     assert len(one) == 1
 
 
+def test_methods_and_thresholds_pick_the_conditions_run(capsys):
+    """--methods / --thresholds run a subset of the conditions (one cell row each per task and hands); the report
+    (--docs) needs them all, and an unknown name is an error naming the option."""
+    X_main.main(["--trials", "1", "--workers", "1", "--paper-check", "0", "--methods", "exact", "--thresholds", "-0.7"])
+    rows = [line for line in capsys.readouterr().out.splitlines() if "success" in line]
+    assert len(rows) == len(X.CELLS) and all(line.startswith("exact c=-0.7") for line in rows)
+    for argv, option in ((["--methods", "exact,bogus"], "--methods"), (["--thresholds", "0.5"], "--thresholds"),
+                         (["--thresholds", "x"], "--thresholds"), (["--docs", "/nonexistent", "--methods", "exact"],
+                                                                   "--docs")):
+        with pytest.raises(SystemExit):
+            X_main.main(argv)
+        assert option in capsys.readouterr().err
+
+
 def test_under_the_physical_push_the_left_hand_takes_the_base_and_does_not_knock_it():
     """Issue 20 item 6 under the physical push (docs/grasp.md "A resting body's support bears the press"): the
     two-hand users' left hand is picked up with its fingers already in the base; the base rests on the table,

@@ -2,7 +2,8 @@
 
 ``python -m handsim.experiments [--trials N] [--json] [--quick]`` runs every task (open / close, one or two
 hands) under every condition (method exact / paper / soft, grasp threshold -0.7 / +0.7) and regenerates
-``docs/experiments.md`` and its plots. This module holds the trial runner and the statistics; ``__main__``
+``docs/experiments.md`` and its plots (``--docs``); ``--methods exact --thresholds -0.7`` runs only those
+conditions (a quicker measurement; not with ``--docs``). This module holds the trial runner and the statistics; ``__main__``
 holds the command line and the report.
 
 Success of one trial (``SUCCESS`` in words, used by the report):

@@ -253,7 +253,24 @@ def main(argv=None):
     ap.add_argument("--rule", default=None, metavar="SPEC",
                     help="grasp rule for every condition, in the judge's syntax (python -m handsim.intent --rule): "
                          "'contacts', 'paper' or 'NAME:field=value,...' (the condition still sets c)")
+    ap.add_argument("--methods", default=",".join(METHODS), metavar="LIST",
+                    help=f"comma-separated methods to run (default all: {','.join(METHODS)}); not with --docs")
+    ap.add_argument("--thresholds", default=",".join(str(c) for c in THRESHOLDS), metavar="LIST",
+                    help="comma-separated grasp thresholds c to run (default all: "
+                         f"{','.join(str(c) for c in THRESHOLDS)}); not with --docs")
     args = ap.parse_args(argv)
+    methods = tuple(m for m in args.methods.split(",") if m)
+    if not methods or any(m not in METHODS for m in methods):
+        ap.error(f"--methods: expected a comma-separated subset of {','.join(METHODS)}, got {args.methods!r}")
+    try:
+        thresholds = tuple(float(c) for c in args.thresholds.split(",") if c)
+    except ValueError:
+        thresholds = ()
+    if not thresholds or any(c not in THRESHOLDS for c in thresholds):
+        ap.error(f"--thresholds: expected a comma-separated subset of {','.join(str(c) for c in THRESHOLDS)}, "
+                 f"got {args.thresholds!r}")
+    if args.docs is not None and (set(methods) != set(METHODS) or set(thresholds) != set(THRESHOLDS)):
+        ap.error("--docs: the report needs every method and threshold (drop --methods / --thresholds)")
     if args.rule is not None:
         from ..intent import parse_rule
         try:
@@ -269,7 +286,7 @@ def main(argv=None):
     t0 = time.perf_counter()
     from ..runners import make_runner
     runner = make_runner(args.ray, args.workers)
-    results = run_all(trials, runner=runner, rule=args.rule)
+    results = run_all(trials, methods, thresholds, runner=runner, rule=args.rule)
     n_check = min(trials, max(0, args.paper_check), 1 if args.quick else trials)
     check = paper_cross_check(results, n_check, runner=runner, rule=args.rule)
     seconds = time.perf_counter() - t0
