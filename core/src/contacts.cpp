@@ -319,7 +319,10 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
   const Vec3 dv = hand_at_body.linear - body.linear, dw = hand_at_body.angular - body.angular;
   auto prev = previous.begin();
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
-    while (prev != previous.end() && prev->particle < c.particle) ++prev;
+    // The next face is most often the one (the full pass's contacts are most of the faces); further on it is
+    // found by bisection (the hold path's two witnesses among a held lid's 255 faces).
+    if (prev != previous.end() && prev->particle < c.particle && ++prev != previous.end() && prev->particle < c.particle)
+      prev = std::lower_bound(prev, previous.end(), c.particle, [](const EntryFace& f, int p) { return f.particle < p; });
     const Vec3 x = centres.col(c.particle);
     // The centre in body coordinates, for the particles that may have crossed the body only (as `relative`).
     auto local = [&] { return Vec3(R.transpose() * (x - pose.position)); };
