@@ -311,7 +311,7 @@ def main(argv=None):
             print(f"{r['method']:5s} c={r['threshold']:+.1f} {r['task']:5s} {r['hands']}h: success "
                   f"{100 * r['success_rate']:5.1f} %  median {_fmt(r['median_time_s'], '.2f')} s  viol "
                   f"{r['max_violation_m']:.1e} m  overshoot {r['max_overshoot_rad']:.1e} rad  false grasps "
-                  f"{r['false_grasps']}  drops {r['drops']}")
+                  f"{r['false_grasps']}  drops {r['drops']}  knocked {r['knocked']}  retried {r['retries']}")
         print(f"{len(results)} trials in {seconds:.0f} s on {runner.describe()} "
               f"({len(results) / seconds / runner.cores():.2f} trials/s per core)"
               + (f"; report: {os.path.join(docs, 'experiments.md')}" if docs is not None else ""))
