@@ -304,18 +304,24 @@ constexpr double kOppositeFaces = -0.5;
 // How many frames back along its relative velocity a first contact's crossing may lie (see entry_face).
 constexpr double kEntryFrames = 2.0;
 
+// The hand's motion keep_entry_faces reads: its particles' own where the world keeps the bones' history.
+HandMotion motion_of(const WorldDef& def, const HandSlot& h) {
+  if (!keeps_articulation(def)) return {h.history};
+  return {h.history, &h.articulation, h.model.get(), def.grasp.velocity_window_s, def.grasp.velocity_window};
+}
+
 }  // namespace
 
 void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& shape, const Pose& pose,
-                      const BodyVelocity& body, const HandMotionHistory& hand, double dt,
+                      const BodyVelocity& body, const HandMotion& hand, double dt,
                       const std::vector<EntryFace>& previous, std::vector<EntryFace>& faces,
                       std::vector<ParticleContact>& contacts) {
   faces.clear();
   if (contacts.empty()) return;
   const Mat3 R = pose.orientation.normalized().toRotationMatrix();
-  // The hand's motion relative to the body, once per pair: the hand's velocity estimate is a least-squares
+  // The palm's motion relative to the body, once per pair: the hand's velocity estimate is a least-squares
   // slope over its history, too dear to evaluate per contact (hundreds on a pinched lid).
-  const BodyVelocity hand_at_body = hand.attached_body_velocity(pose.position);
+  const BodyVelocity hand_at_body = hand.palm.attached_body_velocity(pose.position);
   const Vec3 dv = hand_at_body.linear - body.linear, dw = hand_at_body.angular - body.angular;
   auto prev = previous.begin();
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
@@ -331,8 +337,16 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
     face.offset = face.normal.dot(R.transpose() * (c.point - pose.position));
     const bool touched_before = prev != previous.end() && prev->particle == c.particle;
     // Only the particles that may have crossed the body need their motion relative to it (most contacts of a
-    // held body are neither inside nor leaving, and skip this).
-    auto relative = [&] { return Vec3(dv + dw.cross(x - pose.position)); };
+    // held body are neither inside nor leaving, and skip this). A particle moves along its own path: with the bones'
+    // history that is its bone's motion, the finger's flexion with the palm's. The palm's rigid motion alone misses a
+    // fingertip curling through a lid under a still palm: its reach was a radius, and a tip going 5 mm a 30 Hz frame
+    // came out of the 1.5 cm lid answered by the far face, where at 60 Hz it kept its entry face (docs/grasp.md "Why
+    // a push depends on the frame rate").
+    auto relative = [&] {
+      if (hand.bones == nullptr) return Vec3(dv + dw.cross(x - pose.position));
+      return Vec3(hand.bones->point_velocity(*hand.model, c.particle, x, hand.span, hand.most) -
+                  (body.linear + body.angular.cross(x - pose.position)));
+    };
     // How much deeper the entry face may say a particle coming out on the far side is than last frame: as far
     // as it moved relative to the body in two frames (slack for the lag of the velocity estimate), plus a
     // radius. More and it did not cross the body this frame (an 18 cm base, knocked spinning under the
@@ -348,7 +362,7 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
       // anything.
       face = *prev;
       replaced = true;
-    } else if (inside && hand.has_velocity()) {
+    } else if (inside && hand.palm.has_velocity()) {
       // A centre inside at its first contact crossed the surface within the last frame; two frames of slack
       // for the lag of the velocity estimate (a 4-sample slope).
       replaced = entry_face(shape, local(), R.transpose() * relative(), kEntryFrames * dt, face.normal, face.offset);
@@ -430,7 +444,7 @@ bool HandParticles::hold_by_witness(uint32_t hi, uint32_t bi, HandBodyPair& pair
   collide_particle_ranges(h.state.tracked_positions, ranges, radius + margin, b.prepared, b.pose, found);
   if (found.size() != 2) return false;
   for (ParticleContact& c : found) c.depth -= margin;
-  keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt,
+  keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, motion_of(def, h), dt,
                    pair.previous_faces, scratch.faces, found);
   if (!(found[0].normal.dot(found[1].normal) < def.grasp.cos_threshold)) return false;  // as witness_opposes
   // The entry faces are the previous ones with the witnesses' renewed. The previous list itself is moved over
@@ -481,7 +495,7 @@ void HandParticles::complete_contacts(uint32_t hi) {
     collide_particle_ranges(h.state.tracked_positions, scratch.ranges, radius + margin, b.prepared, pair.contact_pose,
                             found);
     for (ParticleContact& c : found) c.depth -= margin;
-    keep_entry_faces(h.state.tracked_positions, radius, b.prepared, pair.contact_pose, pair.contact_velocity, h.history,
+    keep_entry_faces(h.state.tracked_positions, radius, b.prepared, pair.contact_pose, pair.contact_velocity, motion_of(def, h),
                      pair.contact_dt, pair.previous_faces, scratch.faces, found);
     pair.contacts.swap(found);
     pair.lazy = false;
@@ -586,7 +600,7 @@ StageReport detect_contacts(HandParticles& particles, uint64_t body_version, dou
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
       if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair(def.grasp)).first;
-      keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, h.history, dt, it->second.previous_faces,
+      keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, motion_of(def, h), dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);
       // A held pair's full pass is the anchor of the hold path's next steps.

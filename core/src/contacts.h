@@ -30,6 +30,18 @@ bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double ma
                 double& offset);
 
 class HandMotionHistory;
+class ArticulationHistory;
+
+// How a hand moves at its particles (keep_entry_faces): the palm's rigid motion, or, where the world keeps its
+// bones' history (`bones`, keeps_articulation), each particle's own motion on its bone, measured as the Wrap press
+// measures it (ArticulationHistory::point_velocity over `span` s, at most `most` samples).
+struct HandMotion {
+  const HandMotionHistory& palm;
+  const ArticulationHistory* bones = nullptr;
+  const HandModel* model = nullptr;
+  double span = 0;
+  int most = 0;
+};
 
 // A face plane in body coordinates: points x on it satisfy normal . x = offset; normal points out.
 struct EntryFace {
@@ -44,9 +56,9 @@ struct EntryFace {
 // body through a face keeps that face while its centre is inside, or is coming out on the far side, and is
 // measured against it. `contacts` (sorted by particle) are rewritten in place; `faces` gets this step's face
 // of each, `previous` is last step's list of the same (hand, body) pair. `body` is the body's velocity and
-// `hand` the hand's motion history (for the motion relative to the body).
+// `hand` the hand's motion (for the motion relative to the body).
 void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const PreparedShape& shape, const Pose& pose,
-                      const BodyVelocity& body, const HandMotionHistory& hand, double dt,
+                      const BodyVelocity& body, const HandMotion& hand, double dt,
                       const std::vector<EntryFace>& previous, std::vector<EntryFace>& faces,
                       std::vector<ParticleContact>& contacts);
 
