@@ -375,57 +375,6 @@ Pose moved_out(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint
   return from;
 }
 
-// Whether a push along `push` (unit) lies within the friction cone of one of a body's support contacts: then the
-// support bears it at any force, since pressing the body into the support raises the friction that holds it as much
-// as the push's share along the surface drives it (|push along| <= mu |push into|, a wedge's self-locking).
-bool borne_by_support(const std::vector<SkinContact>& support, const Vec3& push) {
-  for (const SkinContact& s : support) {
-    const double into = push.dot(s.normal);  // a support contact's normal points into the support
-    if (into > 0 && (push - into * s.normal).norm() <= s.friction * into) return true;
-  }
-  return false;
-}
-
-// A supported body shoved along its support by the bone (docs/grasp.md "A resting body's support bears the press",
-// "An edge swung into it"). Where the bone overlaps (scratch.overlap) and pushes outside the support's friction cone,
-// nothing stops the arm that drives the bone and only friction, bounded by the load, holds the body sideways: a real
-// hand's edge swung into a resting box shoves the box along, where the support rule alone left the tracked edge to
-// go on into it. So the body is moved at once (the pose returned, no velocity) by the least displacement along its
-// support that takes each such contact out of the bone's motion along the support this frame (the hand's velocity
-// there projected on the support's plane, times dt, into the body; at most the overlap): the body keeps pace with
-// the edge that drives it and the overlap grows no more. Only that motion shoves: a hand lowered onto a body or
-// appearing in it (a tracker's start) moves along the support by nothing, and its overlap stays as the support rule
-// leaves it. The displacement keeps the body on its support: the support's contacts stop it from entering the
-// support (push-only, no bound), and it turns only about the support's normal, since tipping over a footprint's edge
-// is what the weight resists and the press's velocity solve weighs.
-Pose slid_along_support(const Body& b, PoseFitScratch& scratch, const InverseInertia& inverse, double dt) {
-  const std::vector<SkinContact>& support = scratch.support;
-  Vec3 up = Vec3::Zero();  // the support's outward normal
-  for (const SkinContact& s : support) up -= s.normal;
-  if (!(up.norm() > 0)) return b.pose;  // supports on opposite sides (a body wedged between two): no plane to slide in
-  up.normalize();
-  std::vector<SkinContact>& driven = scratch.driven;
-  driven.clear();
-  for (size_t k = 0; k < scratch.overlap.size(); ++k) {
-    const SkinContact& c = scratch.overlap[k];
-    const Vec3 push = -c.normal;
-    if (borne_by_support(support, push)) continue;
-    const Vec3 along = scratch.overlap_hand[k] - scratch.overlap_hand[k].dot(up) * up;
-    const double entry = std::min(along.dot(push) * dt, c.hand_velocity.norm());  // c's "speed" is its overlap
-    if (entry > 0) driven.push_back({c.point, c.normal, push * entry, c.max_impulse, 0.0});
-  }
-  if (driven.empty()) return b.pose;
-  for (const SkinContact& s : support) driven.push_back({s.point, s.normal, Vec3::Zero(), s.max_impulse, 0.0});
-  const Vec3 local = b.pose.orientation.conjugate() * up;
-  double moment = 0;  // the body's moment of inertia about `up`
-  for (int k = 0; k < 3; ++k) moment += b.mass * b.unit_inertia[k] * local[k] * local[k];
-  InverseInertia sliding = inverse;
-  sliding.inverse_inertia = moment > 0 ? Mat3(up * up.transpose() / moment) : Mat3::Zero();
-  // Solved as the support's velocity solve is, to the same motion at a contact (kSupportSettled over the frame).
-  const BodyVelocity shift = skin_press(driven, sliding, {}, kSupportSweeps, kSupportSettled * dt);
-  return advanced(b.pose, shift.linear, shift.angular, 1.0);
-}
-
 // PushModel::Physical: the pulp's bounded impulses (`pressed`) set the velocity; the least displacement out of the
 // bone's overlap (`overlap`) moves a free body without any (docs/grasp.md "Push models"). A body resting on static
 // geometry (support_contacts) is held by its support instead (docs/grasp.md "A resting body's support bears the
@@ -455,10 +404,9 @@ void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<J
   support.clear();
   if (!b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, support);
   const bool displaced = support.empty() && !scratch.overlap.empty();
-  const Pose from = displaced      ? moved_out(def, bodies, joints, scratch, b, inverse, dt)
-                    : b.jointed()    ? joint_child_pose(bodies, joints[b.hard_joint])
-                    : support.empty() ? b.pose
-                                      : slid_along_support(b, scratch, inverse, dt);
+  const Pose from = displaced    ? moved_out(def, bodies, joints, scratch, b, inverse, dt)
+                    : b.jointed() ? joint_child_pose(bodies, joints[b.hard_joint])
+                                  : b.pose;
   const Vec3 weight = def.gravity * dt;
   pressed.insert(pressed.end(), support.begin(), support.end());
   BodyVelocity v = support.empty() ? skin_press(pressed, inverse, {b.linear, b.angular})
@@ -532,7 +480,6 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     const bool physical = def.push_model == PushModel::Physical || def.push_model == PushModel::Wrap;
     pressed.clear();
     overlap.clear();
-    scratch.overlap_hand.clear();
     for (size_t e = first; e < end; ++e) {
       const auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
@@ -545,10 +492,8 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
           // the hand is closing its grip (Wrap): then all of it is pulp.
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
-          if (c.depth > skin && !wrapping) {
+          if (c.depth > skin && !wrapping)
             overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
-            scratch.overlap_hand.push_back(pressed.back().hand_velocity);
-          }
           continue;
         }
         if (c.depth <= skin) {

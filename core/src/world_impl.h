@@ -334,8 +334,6 @@ struct PoseFitScratch {
   std::vector<Vec3> from, to;
   std::vector<SkinContact> pressed;  // contacts within the skin
   std::vector<SkinContact> overlap;  // the bone's overlap (PushModel::Physical)
-  std::vector<Vec3> overlap_hand;    // the hand's velocity at each of `overlap`'s contacts (slid_along_support)
-  std::vector<SkinContact> driven;   // what shoves a supported body along its support, and the support
   std::vector<CoordinatePush> levers;  // a hinge's or slider's child's overlap (overlap_step)
   std::vector<SkinContact> support;  // where a pushed body rests on static geometry (PushModel::Physical)
   StaticStopScratch stop;            // support_contacts' query of the static geometry

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
 using namespace handsim;
 
@@ -473,65 +472,4 @@ TEST(FirstTouch, PhysicalPushLeavesARestingBodyAHandAppearsInside) {
     EXPECT_LE(moved, 1e-3) << hz << " Hz";
     EXPECT_LE(tilted, 1 * kDeg) << hz << " Hz";
   }
-}
-
-namespace {
-
-// An open hand's edge swung sideways into a resting box (docs/grasp.md "A resting body's support bears the press",
-// "An edge swung into it"): the palm-down right hand, its little-finger side first, moves along +x at `speed`
-// through where the 4 cm, 100 g cube rests, the palm 3 cm up (its particles about 1.5 to 4.5 cm above the ground).
-struct Swing {
-  double deepest = 0;  // the deepest any particle went into the cube through a side (m)
-  double first = 0;    // ... in the frame the hand first touched a side
-  double pushed = 0;   // how far the hand went on after it first touched a side (m)
-  double carried = 0;  // how far the cube went along x (m)
-  double radius = 0;   // the hand's particle radius (m)
-};
-Swing swing_into(PushModel model, double hz, double speed) {
-  WorldDef def;
-  def.push_model = model;
-  World world(def);
-  HandDef hand_def;
-  hand_def.particle_count = 1182;
-  const HandId hand = world.add_hand(hand_def);
-  const BodyId id = add_box(world, kCube, Vec3(0, kCube.half.y(), 0));
-  const double dt = 1 / hz;
-  for (int i = 0; i < int(0.5 * hz); ++i) world.step(dt);
-  const double start = world.body_pose(id).position.x();
-  Swing s;
-  s.radius = world.hand_model(hand).particle_radius;
-  double touched_at = std::numeric_limits<double>::quiet_NaN(), palm_x = 0;
-  for (int i = 0; i <= int(0.18 / speed * hz); ++i) {
-    palm_x = -0.15 + speed * i * dt;
-    world.step(dt, {{hand, make_hand_frame(Handedness::Right, Pose{Vec3(palm_x, 0.03, 0), Quat::Identity()})}});
-    for (const ParticleContact& c : world.body_contacts(id, hand)) {
-      if (std::abs(c.normal.y()) > 0.5) continue;  // the top's overlap is the support's to bear
-      if (std::isnan(touched_at)) touched_at = palm_x;
-      if (palm_x == touched_at) s.first = std::max(s.first, c.depth);
-      s.deepest = std::max(s.deepest, c.depth);
-    }
-  }
-  s.pushed = palm_x - touched_at;
-  s.carried = world.body_pose(id).position.x() - start;
-  return s;
-}
-
-}  // namespace
-
-// Nothing stops the arm that drives a hand's edge sideways into a resting box, and only friction holds the box
-// sideways: the box keeps pace with the edge, so the overlap it first touched with grows no more (0.1 mm allowed,
-// far below a tracker's millimetre: the displacement is solved to 2 micrometres), and the box goes along. Before,
-// the support bore every push on a supported body and the edge went on 6 to 19 mm into the box (deeper the lower
-// the frame rate), its particles' centres inside.
-TEST(FirstTouch, AnEdgeSwungIntoARestingBoxCarriesItAlong) {
-  for (PushModel model : {PushModel::Physical, PushModel::Wrap})
-    for (double hz : {30.0, 60.0, 120.0}) {
-      const Swing s = swing_into(model, hz, 0.3);
-      std::printf("edge swung at 0.3 m/s into a resting cube, %s, %.0f Hz: first %.1f mm, deepest %.1f mm, hand on "
-                  "%.1f mm after touching, cube carried %.1f mm\n", model == PushModel::Wrap ? "wrap" : "physical",
-                  hz, s.first * 1e3, s.deepest * 1e3, s.pushed * 1e3, s.carried * 1e3);
-      EXPECT_GT(s.pushed, 0.05) << hz << " Hz: the edge reached the cube";
-      EXPECT_LE(s.deepest, s.first + 1e-4) << hz << " Hz";
-      EXPECT_GT(s.carried, s.pushed - s.radius) << hz << " Hz: the cube went along";
-    }
 }
