@@ -616,11 +616,14 @@ StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt) {
           }
       const GraspEvent e =
           pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
-      if (e.type == GraspEventType::GraspEnd)
+      if (e.type == GraspEventType::GraspEnd) {
         grasps.end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);
+        pair.let_go = def.push_model == PushModel::Wrap && b.jointed();
+      }
       // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
       if (pair.tracker.grasped() && !b.held_by(hi)) grasps.begin_grasp(hi, bi);
+      if (pair.tracker.grasped()) pair.let_go = false;
       ++decided;
     }
     // Forget pairs with nothing going on, so the map holds only what touches or holds.

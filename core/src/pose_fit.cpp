@@ -278,6 +278,17 @@ bool wraps(const WorldDef& def, const HandSlot& hand) {
          hand.grip.closed_by() >= def.grasp.closing_distance;
 }
 
+// How far contact `c`'s particle moved into `b` through its face this frame: the particle's own velocity (its bone's
+// motion, palm and articulation together, as Wrap's press measures a closing finger's) less the body's at the point,
+// along -normal, over dt; never negative. The overlap of a hand that let go of a jointed body (HandBodyPair::let_go)
+// is removed only this far: the rest is the grip's depth, which the hold left and the release did not push.
+double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, const ParticleContact& c, double dt) {
+  const Vec3 particle = hand.articulation.point_velocity(*hand.model, c.particle, c.point, def.grasp.velocity_window_s,
+                                                         def.grasp.velocity_window);
+  const Vec3 body = b.linear + b.angular.cross(c.point - b.pose.position);
+  return std::max(0.0, (particle - body).dot(-c.normal) * dt);
+}
+
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame, from the pose `from` (b.pose, or where
 // the physical push's displacement put it: moved_out).
 void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
@@ -486,14 +497,18 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       const size_t before = from.size();
       const HandSlot& hand = hands[entry.first.first];
       const bool wrapping = physical && wraps(def, hand);
+      const bool let_go = entry.second.let_go;
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
-          // the hand is closing its grip (Wrap): then all of it is pulp.
+          // the hand is closing its grip (Wrap): then all of it is pulp. A hand that let go of it removes only what
+          // it moved in this frame (moved_into).
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
-          if (c.depth > skin && !wrapping)
-            overlap.push_back({c.point, c.normal, -c.normal * (c.depth - skin), kUnbounded, 0.0});
+          if (c.depth > skin && !wrapping) {
+            const double bone = let_go ? std::min(c.depth - skin, moved_into(def, hand, b, c, dt)) : c.depth - skin;
+            if (bone > 0) overlap.push_back({c.point, c.normal, -c.normal * bone, kUnbounded, 0.0});
+          }
           continue;
         }
         if (c.depth <= skin) {
