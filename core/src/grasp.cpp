@@ -619,7 +619,7 @@ StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt) {
       if (e.type == GraspEventType::GraspEnd) {
         grasps.end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
                   e.zero_velocity);
-        pair.let_go = def.push_model == PushModel::Wrap && b.jointed();
+        pair.let_go = def.push_model == PushModel::Wrap;  // its overlap now is the grip's (HandBodyPair::let_go)
       }
       // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
       if (pair.tracker.grasped() && !b.held_by(hi)) grasps.begin_grasp(hi, bi);

@@ -280,7 +280,7 @@ bool wraps(const WorldDef& def, const HandSlot& hand) {
 
 // How far contact `c`'s particle moved into `b` through its face this frame: the particle's own velocity (its bone's
 // motion, palm and articulation together, as Wrap's press measures a closing finger's) less the body's at the point,
-// along -normal, over dt; never negative. The overlap of a hand that let go of a jointed body (HandBodyPair::let_go)
+// along -normal, over dt; never negative. The overlap of a hand that let go of the body (HandBodyPair::let_go)
 // is removed only this far: the rest is the grip's depth, which the hold left and the release did not push.
 double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, const ParticleContact& c, double dt) {
   const Vec3 particle = hand.articulation.point_velocity(*hand.model, c.particle, c.point, def.grasp.velocity_window_s,

@@ -183,9 +183,9 @@ struct HandBodyPair {
   // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
   std::vector<EntryFace> entry_faces, previous_faces;
   bool opposing_alone = false;  // this step: eq. 3 over this hand's contacts alone (decide_grasps)
-  // PushModel::Wrap: this hand let go of this jointed body and has touched it in every step since (the pair ends
-  // with its contacts). Its overlap then is the grip's, left by the hold, not a push: fit_touched_bodies moves the
-  // body out of it only as far as the hand moves into it (docs/grasp.md "Under Wrap": the let-go).
+  // PushModel::Wrap: this hand let go of this body and has touched it in every step since (the pair ends with its
+  // contacts). Its overlap then is the grip's, left by the hold, not a push: fit_touched_bodies moves the body out of
+  // it only as far as the hand moves into it (docs/grasp.md "Under Wrap": the let-go).
   bool let_go = false;
   // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1. The
   // hold path (docs/grasp.md "The hold path") collides only these two while the hand holds the body still.
