@@ -289,6 +289,15 @@ double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, cons
   return std::max(0.0, (particle - body).dot(-c.normal) * dt);
 }
 
+// PushModel::Wrap: whether a closing hand's (`wraps`) contact `c` leaves a floating body (free, on no support) where
+// it is: a contact of a digit (a phalanx of the thumb or a finger: rigid_part other than the palm). In reach to grasp
+// the digits' closing is stopped at contact and the grip forms on the object without displacing it; the tracked digit
+// going on into the body is the recording of a hand that closed on nothing (the judge places its objects into
+// recordings made without them), not a push. The palm is carried by the arm and presses as before. A body on a
+// support is left to the press: its support and friction already bear a digit's press into it (docs/grasp.md "A
+// closing digit does not displace a floating body").
+bool forms_grip(const HandSlot& hand, const ParticleContact& c) { return rigid_part(*hand.model, c.particle) != kPalm; }
+
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame, from the pose `from` (b.pose, or where
 // the physical push's displacement put it: moved_out).
 void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
@@ -410,10 +419,8 @@ Pose moved_out(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint
 void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
                    const BodyBoxes& boxes, PoseFitScratch& scratch, Body& b, double dt) {
   std::vector<SkinContact>& pressed = scratch.pressed;
-  std::vector<SkinContact>& support = scratch.support;
+  const std::vector<SkinContact>& support = scratch.support;  // support_contacts of `b`, as the caller found them
   const InverseInertia inverse = inverse_inertia(b);
-  support.clear();
-  if (!b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, support);
   const bool displaced = support.empty() && !scratch.overlap.empty();
   const Pose from = displaced    ? moved_out(def, bodies, joints, scratch, b, inverse, dt)
                     : b.jointed() ? joint_child_pose(bodies, joints[b.hard_joint])
@@ -491,6 +498,9 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     const bool physical = def.push_model == PushModel::Physical || def.push_model == PushModel::Wrap;
     pressed.clear();
     overlap.clear();
+    scratch.support.clear();
+    if (physical && !b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, scratch.support);
+    const bool floating = physical && !b.jointed() && scratch.support.empty();
     for (size_t e = first; e < end; ++e) {
       const auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
@@ -500,10 +510,11 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       const bool let_go = entry.second.let_go;
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
+        if (wrapping && floating && forms_grip(hand, c)) continue;
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
-          // the hand is closing its grip (Wrap): then all of it is pulp. A hand that let go of it removes only what
-          // it moved in this frame (moved_into).
+          // the hand is closing its grip (Wrap): then all of it is pulp, and its digits leave a floating body alone
+          // (forms_grip). A hand that let go of it removes only what it moved in this frame (moved_into).
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
           if (c.depth > skin && !wrapping) {
             const double bone = let_go ? std::min(c.depth - skin, moved_into(def, hand, b, c, dt)) : c.depth - skin;

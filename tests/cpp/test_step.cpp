@@ -232,10 +232,9 @@ TEST(Step, PinchGraspsTheCubeWithThePadsReach) {
 // PushModel::Wrap (docs/grasp.md "Wrap"): the pads-reach pinch closing its thumb onto the cube floating in zero
 // gravity, as the judge's cubes do (on the ground its support holds it under either push), put back at rest after
 // the approach. The physical push shoves the cube out of the thumb's way by the thumb's overlap before the pair
-// holds it (3.61 mm, printed). Under Wrap the frame before the hand counts as closing shoves it the same (1.48 mm);
-// then the closing thumb presses it at the thumb's own speed (1.5 mm a frame) into the index, which stops it at one
-// particle it pivots about, for the one frame before the pair holds it (2.41 mm, printed): less than the shove, and
-// both grasp it.
+// holds it (3.61 mm, printed). Under Wrap the frame before the hand counts as closing shoves it the same (1.48 mm,
+// printed); then the closing digits leave the floating cube where it is (Step.WrapClosingDigitsLeaveAFloatingCubeWhereItIs)
+// until the pair holds it: less than the shove, and both grasp it.
 TEST(Step, WrapKeepsTheCubeTheClosingPinchShovesUnderThePhysicalPush) {
   double moved[2];
   for (PushModel model : {PushModel::Physical, PushModel::Wrap}) {
@@ -259,6 +258,40 @@ TEST(Step, WrapKeepsTheCubeTheClosingPinchShovesUnderThePhysicalPush) {
   }
   EXPECT_GT(moved[0], 0.002);
   EXPECT_LT(moved[1], moved[0]);
+}
+
+// PushModel::Wrap, a closing digit does not displace a floating body (docs/grasp.md "A closing digit does not
+// displace a floating body"): a still hand closes its thumb from 4 cm open onto the pinch over 20 frames (12 cm/s)
+// and holds; halfway, with the span shrunk by 2 cm (more than closing_distance: the hand counts as closing), a cube
+// floating at rest in zero gravity is put where the pinch closes (the index pad 0.5 mm into its +x face, the thumb
+// still 2 cm short of its -x face). From then on only the closing hand's digits touch it and nothing else acts on it,
+// so it stays exactly where it was put (the analytic answer: 0 m), and the pair grasps it. Under the physical push
+// the index's overlap and then the thumb's shove it (printed).
+TEST(Step, WrapClosingDigitsLeaveAFloatingCubeWhereItIs) {
+  for (PushModel model : {PushModel::Physical, PushModel::Wrap}) {
+    WorldDef def;
+    def.ground = false;
+    def.gravity = Vec3::Zero();
+    def.push_model = model;
+    Scene s(def);
+    const double open = s.pinch.touch - 0.04;
+    s.world.set_body_pose(s.box, translation(Vec3(0.5, 0, 0)) * s.rest);  // out of the hand's way
+    for (int i = 0; i < 30; ++i) s.step({s.pinch.frame(s.rest, open)});
+    for (int i = 1; i <= 20; ++i) {
+      if (i == 10) {
+        s.world.set_body_pose(s.box, s.rest);
+        s.world.set_body_velocity(s.box, Vec3::Zero(), Vec3::Zero());
+      }
+      s.step({s.pinch.frame(s.rest, open + (s.hold() - open) * i / 20.0)});
+    }
+    for (int i = 0; i < 5; ++i) s.step({s.pinch.frame(s.rest, s.hold())});
+    const double moved = (s.world.body_pose(s.box).position - s.rest.position).norm();
+    std::printf("a still hand closing its thumb onto a floating cube, %s push: the cube moved %.3f mm, %d grasp(s)\n",
+                model == PushModel::Wrap ? "wrap" : "physical", moved * 1e3, count(s.log, EventType::GraspBegin));
+    EXPECT_EQ(count(s.log, EventType::GraspBegin), 1);
+    EXPECT_TRUE(s.world.body_grasp(s.box).grasped);
+    if (model == PushModel::Wrap) EXPECT_LT(moved, 1e-9);
+  }
 }
 
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
