@@ -222,10 +222,14 @@ namespace {
 
 // The same conditions as validate_frame's named checks, without building their argument names: a good joint
 // (every joint of every step, normally) costs no allocation; a bad one falls through to the named checks.
+// Every comparison is false for a NaN and each bound for an infinity (an infinite coefficient makes the norm
+// infinite), so the bounds also prove every number finite: no separate finiteness pass.
 bool joint_is_good(const JointPose& jp) {
-  return jp.position.allFinite() && jp.orientation.coeffs().allFinite() &&
+  const Vec3& p = jp.position;
+  constexpr double far = validate::kMaxCoordinate;
+  return std::abs(p.x()) <= far && std::abs(p.y()) <= far && std::abs(p.z()) <= far &&
          std::abs(jp.orientation.norm() - 1.0) <= validate::kQuatTolerance && jp.radius >= 0 &&
-         jp.radius <= kMaxJointRadius && jp.position.cwiseAbs().maxCoeff() <= validate::kMaxCoordinate;
+         jp.radius <= kMaxJointRadius;
 }
 
 }  // namespace

@@ -471,13 +471,17 @@ int HandParticles::skin_particles_in_reach(HandSlot& h) {
   h.reach_groups.clear();
   for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
     const size_t first = r.span_first[s], last = r.span_first[s + 1];
-    double span_box[6];
-    coarse_bounds(layout.groups[first], r.span_centre[s], r.span_radius[s], h.state.bones, span_box);
-    if (!in_reach(span_box)) {  // the whole span is out of reach: its box bounds the hand, its groups are empty
-      grow(lo, hi, span_box);
-      for (size_t g = first; g < last; ++g) empty(&h.group_bounds[6 * g]);
-      all = false;
-      continue;
+    // A span of one group is tested as that group: its ball holds the one group's ball, so its box would only
+    // repeat the group's test (the hand's bounds then take the group's box, which the span's holds).
+    if (last - first > 1) {
+      double span_box[6];
+      coarse_bounds(layout.groups[first], r.span_centre[s], r.span_radius[s], h.state.bones, span_box);
+      if (!in_reach(span_box)) {  // the whole span is out of reach: its box bounds the hand, its groups are empty
+        grow(lo, hi, span_box);
+        for (size_t g = first; g < last; ++g) empty(&h.group_bounds[6 * g]);
+        all = false;
+        continue;
+      }
     }
     for (size_t g = first; g < last; ++g) {
       double* box = &h.group_bounds[6 * g];
