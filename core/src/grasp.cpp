@@ -233,27 +233,57 @@ double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const
   return (w + s * u - t * v).norm() - (ra0 + s * (ra1 - ra0)) - (rb0 + t * (rb1 - rb0));
 }
 
-double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
+GripTerms grip_terms(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
   auto joint = [&](int j) { return Vec3(bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
   auto radius = [&](int j) { return model.bind.joints[j].radius; };  // the skin round the bones is the bind hand's
   const Vec3 palm = joint(kPalm);
-  double span = pinch_reach > 0
-                    ? std::min(pinch_reach, capsule_gap(joint(kThumbDistal), joint(kThumbTip), radius(kThumbDistal),
-                                                        radius(kThumbTip), joint(kIndexDistal), joint(kIndexTip),
-                                                        radius(kIndexDistal), radius(kIndexTip)))
-                    : (joint(kThumbTip) - joint(kIndexTip)).norm();
-  for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) span += (joint(tip) - palm).norm();
-  return span;
+  GripTerms terms;
+  terms[kThumbTerm] = pinch_reach > 0
+                          ? std::min(pinch_reach, capsule_gap(joint(kThumbDistal), joint(kThumbTip), radius(kThumbDistal),
+                                                              radius(kThumbTip), joint(kIndexDistal), joint(kIndexTip),
+                                                              radius(kIndexDistal), radius(kIndexTip)))
+                          : (joint(kThumbTip) - joint(kIndexTip)).norm();
+  int term = kThumbTerm + 1;
+  for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) terms[term++] = (joint(tip) - palm).norm();
+  return terms;
+}
+
+namespace {
+double sum_of(const GripTerms& terms, unsigned which = ~0u) {
+  double sum = 0;  // the thumb's term first, then the fingers': the order the span was always summed in
+  for (size_t i = 0; i < terms.size(); ++i)
+    if (which & (1u << i)) sum += terms[i];
+  return sum;
+}
+}  // namespace
+
+double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
+  return sum_of(grip_terms(model, bones, pinch_reach));
+}
+
+unsigned touching_terms(const HandModel& model, const std::vector<ParticleContact>& contacts) {
+  unsigned terms = 0;
+  for (const ParticleContact& c : contacts) {
+    const int part = rigid_part(model, c.particle);  // kPalm or a phalanx
+    if (part > kThumbMetacarpal && part <= kThumbTip) {
+      terms |= 1u << kThumbTerm;
+    } else if (part > kIndexMetacarpal && part <= kLittleTip) {
+      const int finger = (part - kIndexMetacarpal) / 5;  // index .. little
+      terms |= 1u << (kThumbTerm + 1 + finger);
+      if (finger == 0) terms |= 1u << kThumbTerm;  // the thumb's term is the gap to the index
+    }
+  }
+  return terms;
 }
 
 double hand_length(const HandModel& model) {
   return (model.bind_inverse[kMiddleTip].inverse().position - model.bind_inverse[kWrist].inverse().position).norm();
 }
 
-void GripHistory::push(double span, const Vec3& palm, double time, double window) {
-  validate::finite(span, "span");
+void GripHistory::push(const GripTerms& terms, const Vec3& palm, double time, double window) {
+  for (double term : terms) validate::finite(term, "span");
   validate::finite(palm, "palm");
-  push_windowed(samples_, Sample{span, palm, time}, window);
+  push_windowed(samples_, Sample{sum_of(terms), terms, palm, time}, window);
 }
 
 bool GripHistory::in_time_order() const { return times_increase(samples_); }
@@ -262,6 +292,13 @@ double GripHistory::closed_by() const {
   double widest = 0;
   for (const Sample& s : samples_) widest = std::max(widest, s.span);
   return samples_.empty() ? 0.0 : widest - samples_.back().span;
+}
+
+double GripHistory::closed_by(unsigned terms) const {
+  if (samples_.empty() || terms == 0) return 0.0;
+  double widest = 0;
+  for (const Sample& s : samples_) widest = std::max(widest, sum_of(s.terms, terms));
+  return widest - sum_of(samples_.back().terms, terms);
 }
 
 double GripHistory::palms_apart(const GripHistory& other) const {
@@ -497,6 +534,18 @@ double closing_needed(const WorldDef& def) { return def.grasp.closing_distance; 
 using Intent = GraspScratch::Intent;
 bool witness_opposes(const HandBodyPair& pair, double cos);
 
+// Whether the hand closes onto the body, for a grasp to begin (GraspSettings::closing_distance): the digits that
+// touch the body closed, their terms of the grip span (touching_terms) shrank by closing_distance within the
+// window. A digit squeezes a body only by closing onto it; digits closing elsewhere press nothing. Two palms
+// clapping on a box (Leap recording three-claps) flex the fingers a little and bring the thumb towards the index:
+// the whole span closes 15-33 mm, the digits on the box (the little finger, the ring finger) 2-6 mm. A held body
+// (not a begin) needs no closing.
+bool closes_on(const WorldDef& def, const HandSlot& h, const HandBodyPair& pair, bool begin) {
+  const double needed = closing_needed(def);
+  if (!begin || needed <= 0) return h.grip.closed_by() >= needed;
+  return h.grip.closed_by(touching_terms(*h.model, pair.contacts)) >= needed;
+}
+
 // Eq. 3 for one hand on one body, and whether the hand has been closing (GraspSettings::closing_distance).
 // A grasp begins with two rigid parts (GraspSettings::across_parts), counting only contacts within pass_depth and,
 // with squeeze_distance, only a pair the hand's articulation carried into the body; any opposing pair keeps it,
@@ -512,7 +561,7 @@ Intent hand_intent(const WorldDef& def, const std::vector<HandSlot>& hands, Hand
   const bool across = g.across_parts && begin;
   const bool every_contact = !begin || (g.pass_depth <= 0 && g.squeeze_distance <= 0);  // no begin-only filter
   Intent out;
-  out.closing = h.grip.closed_by() >= closing_needed(def);
+  out.closing = closes_on(def, h, pair, begin);
   if (!across && every_contact && witness_opposes(pair, g.cos_threshold)) {
     out.opposing = true;
     return out;

@@ -129,6 +129,15 @@ double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const
 // bones, the model's joint radii), at most pinch_reach; with 0 the thumb tip's distance to the index tip. Closing a
 // grab or a pinch shortens it; moving or turning the hand as a whole does not change it.
 double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach);
+// The grip span's five terms, summed by grip_span: the thumb's (kThumbTerm), then the index, middle, ring and little
+// fingertips' distances to the palm joint.
+using GripTerms = std::array<double, 5>;
+constexpr int kThumbTerm = 0;
+GripTerms grip_terms(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach);
+// The grip span's terms (bit i: GripTerms[i]) of the digits `contacts` touch with, by rigid_part: a finger's own
+// term when one of its phalanges touches, the thumb's term when the thumb's or the index finger's phalanges touch.
+// The palm (with the metacarpals and the ball of the thumb) gives none: a digit closes onto a body it touches.
+unsigned touching_terms(const HandModel& model, const std::vector<ParticleContact>& contacts);
 
 // The hand's length in its bind pose (m): wrist joint to middle fingertip. Two hands squeeze a body only with their
 // palms farther apart than this (decide_grasps): a body narrower than a hand is long is one hand's to grip.
@@ -203,16 +212,19 @@ class ArticulationHistory {
 bool squeezing_pair(const std::vector<Vec3>& directions, const std::vector<int>& parts,
                     const std::vector<double>& inward, double c, double needed);
 
-// A hand's grip span and palm position over the last `window` seconds, for GraspSettings::closing_distance.
+// A hand's grip span (its terms, grip_terms) and palm position over the last `window` seconds, for
+// GraspSettings::closing_distance.
 class GripHistory {
  public:
   // Times must increase (throws handsim::Error); samples older than the window before the newest are dropped.
-  void push(double span, const Vec3& palm, double time, double window);
+  void push(const GripTerms& terms, const Vec3& palm, double time, double window);
   void clear() { samples_.clear(); }
   bool empty() const { return samples_.empty(); }
   double span() const { return samples_.empty() ? 0.0 : samples_.back().span; }
   // How much the span shrank from its widest in the window to now (>= 0).
   double closed_by() const;
+  // The same for the sum of the span's `terms` only (bit i: GripTerms[i], as touching_terms gives them); 0 without.
+  double closed_by(unsigned terms) const;
   // How much the distance between this hand's palm and `other`'s shrank from its widest in the window to
   // now, over the samples both have at the same times (0 when they share none).
   double approached_by(const GripHistory& other) const;
@@ -225,6 +237,7 @@ class GripHistory {
   static void visit_state(Self& g, Visitor& v) {
     v.list(g.samples_, [&v](auto& s) {
       v.state(s.span);
+      for (auto& term : s.terms) v.state(term);
       v.state(s.palm);
       v.state(s.time);
     });
@@ -232,7 +245,8 @@ class GripHistory {
 
  private:
   struct Sample {
-    double span = 0;
+    double span = 0;  // the terms' sum (grip_span)
+    GripTerms terms{};
     Vec3 palm = Vec3::Zero();
     double time = 0;
   };

@@ -161,6 +161,41 @@ TEST(ArticulationHistory, CountsOnlyTheHandsOwnMotion) {
   EXPECT_THROW(history.push(state.bones, 1.0, 0.5), Error);  // time must increase
 }
 
+// touching_terms and GripHistory::closed_by(terms) (the closing that begins a grasp: the touching digits'): a thumb
+// closing towards the index (opposition 0 -> 1, the fingers still, as a clapping hand's thumb does) closes the
+// span's thumb term by what the whole span closes, and the little finger's term by nothing; a contact on a finger's
+// phalanx names that finger's term (the index's also the thumb's), on the palm none.
+TEST(GripHistory, ClosedByTheTouchingDigitsOnly) {
+  const HandModel model = build_hand_model(HandDef{});
+  auto on_bone = [&](int bone) {
+    for (int p = 0; p < model.particle_count(); ++p)
+      if (rigid_part(model, p) == bone) return std::vector<ParticleContact>{ParticleContact{p}};
+    ADD_FAILURE() << "no particle on bone " << bone;
+    return std::vector<ParticleContact>{};
+  };
+  const unsigned thumb = 1u << kThumbTerm, index = 1u << (kThumbTerm + 1), little = 1u << (kThumbTerm + 4);
+  EXPECT_EQ(touching_terms(model, on_bone(kThumbDistal)), thumb);
+  EXPECT_EQ(touching_terms(model, on_bone(kIndexIntermediate)), thumb | index);
+  EXPECT_EQ(touching_terms(model, on_bone(kLittleProximal)), little);
+  EXPECT_EQ(touching_terms(model, on_bone(kPalm)), 0u);
+  EXPECT_EQ(touching_terms(model, {}), 0u);
+
+  GripHistory history;
+  HandState state;
+  for (int i = 0; i <= 10; ++i) {
+    HandPoseParams params;
+    params.thumb_opposition = 0.1 * i;
+    pose_hand(model, make_hand_frame(Handedness::Right, Pose{}, params), state);
+    history.push(grip_terms(model, state.bones, 0), Vec3::Zero(), 0.03 * i, 0.5);
+    EXPECT_EQ(history.span(), grip_span(model, state.bones, 0));  // the same sum, bit for bit
+  }
+  ASSERT_GT(history.closed_by(), 0.015);  // the whole hand counts as closing (GraspSettings::closing_distance)
+  EXPECT_NEAR(history.closed_by(thumb), history.closed_by(), 1e-12);
+  EXPECT_NEAR(history.closed_by(little), 0.0, 1e-12);
+  EXPECT_EQ(history.closed_by(0u), 0.0);
+  EXPECT_EQ(GripHistory{}.closed_by(thumb), 0.0);  // no samples
+}
+
 // ArticulationHistory::point_velocity (PushModel::Wrap's press): a particle's own velocity on its bone. The hand moved
 // as a whole at constant velocity gives every particle that velocity; the index curling with the palm still gives
 // its tip the speed of its skinned motion (within 5 %: it is taken to ride its main bone) and a palm particle none.
@@ -455,15 +490,15 @@ TEST(GripHistory, ClosedByAndApproachedByWithinTheWindow) {
   EXPECT_EQ(a.closed_by(), 0.0);
   for (int i = 0; i <= 60; ++i) {
     const double t = i / 60.0;
-    a.push(0.6 - 0.1 * std::max(t - 0.5, 0.0), Vec3(0.2 - 0.1 * t, 0, 0), t, 0.5);  // closes 5 cm in the last 0.5 s
-    b.push(0.6, Vec3(-0.2, 0, 0), t, 0.5);
+    a.push({0.6 - 0.1 * std::max(t - 0.5, 0.0)}, Vec3(0.2 - 0.1 * t, 0, 0), t, 0.5);  // closes 5 cm in the last 0.5 s
+    b.push({0.6}, Vec3(-0.2, 0, 0), t, 0.5);
   }
   EXPECT_NEAR(a.closed_by(), 0.05, 1e-12);  // widest in the window (t = 0.5 s) 0.6, now 0.55
   EXPECT_NEAR(a.span(), 0.55, 1e-12);
   EXPECT_NEAR(a.approached_by(b), 0.05, 1e-9);  // palms 0.35 m apart at t = 0.5 s, 0.3 m at t = 1 s
   EXPECT_EQ(b.closed_by(), 0.0);
-  EXPECT_THROW(a.push(0.5, Vec3::Zero(), 0.5, 0.5), Error);  // time must increase
-  EXPECT_THROW(a.push(NAN, Vec3::Zero(), 2.0, 0.5), Error);
+  EXPECT_THROW(a.push({0.5}, Vec3::Zero(), 0.5, 0.5), Error);  // time must increase
+  EXPECT_THROW(a.push({NAN}, Vec3::Zero(), 2.0, 0.5), Error);
 }
 
 // ---------------------------------------------------------------------------------------------------------

@@ -226,7 +226,7 @@ TEST(State, HashSeesEveryPieceOfStateThatDecidesTheFuture) {
          FAIL() << "no anchor to perturb";
        }},
       {"hand motion history", [&] { w.hands[0].history.push(w.hands[0].palm, w.time + 1); }},
-      {"grip history", [&] { w.hands[0].grip.push(0.3, Vec3::Zero(), w.time + 1, 1.0); }},
+      {"grip history", [&] { w.hands[0].grip.push({0.3}, Vec3::Zero(), w.time + 1, 1.0); }},
       {"hand bones", [&] { w.hands[1].state.bones[3](0, 3) += 1e-9; }},
       {"hand tracked", [&] { w.hands[1].state.tracked ^= true; }},
       {"Bullet sleep", [&] {

@@ -514,8 +514,9 @@ struct Squeeze {
   double fell_to = 1e9;  // its height after the palms part
 };
 
-Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true, double half = 0.15) {
+Squeeze squeeze_big_box(PushModel push, double approach, double closing, bool two_hands = true, double half = 0.15) {
   WorldDef def;
+  def.push_model = push;
   def.grasp.closing_distance = closing;
   World world(def);
   const HandId right = world.add_hand(HandDef{});
@@ -569,8 +570,8 @@ Squeeze squeeze_big_box(double approach, double closing, bool two_hands = true, 
   return out;
 }
 
-TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
-  const Squeeze s = squeeze_big_box(0.04, 0.015);
+void expect_two_palms_lift_a_big_box(PushModel push) {
+  const Squeeze s = squeeze_big_box(push, 0.04, 0.015);
   EXPECT_EQ(s.grasp_begins, 2);
   EXPECT_TRUE(s.held_by_both);
   EXPECT_NEAR(s.lift, 0.2, 0.005);
@@ -578,15 +579,21 @@ TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) {
   EXPECT_NEAR(s.fell_to, 0.0, 0.005);         // and the box falls back to the ground
   // One palm alone pushes the box and never grasps it; palms put against it that never approach it (1 mm
   // of travel) do not grasp it; without the closing rule (GraspSettings::contacts()) two hands do not combine.
-  const Squeeze one = squeeze_big_box(0.04, 0.015, false);
+  const Squeeze one = squeeze_big_box(push, 0.04, 0.015, false);
   EXPECT_EQ(one.grasp_begins, 0);
   EXPECT_LT(one.lift, 0.005);
-  EXPECT_EQ(squeeze_big_box(0.001, 0.015).grasp_begins, 0);
-  EXPECT_EQ(squeeze_big_box(0.04, 0.0).grasp_begins, 0);
+  EXPECT_EQ(squeeze_big_box(push, 0.001, 0.015).grasp_begins, 0);
+  EXPECT_EQ(squeeze_big_box(push, 0.04, 0.0).grasp_begins, 0);
   // Two palms clapped onto a 5 cm cube: one hand grips a body that small, two flat palms are no grip (the palms
   // are nearer each other than a hand is long; the Leap recording three-claps' open hands "grasped" such a cube).
-  EXPECT_EQ(squeeze_big_box(0.04, 0.015, true, 0.025).grasp_begins, 0);
+  EXPECT_EQ(squeeze_big_box(push, 0.04, 0.015, true, 0.025).grasp_begins, 0);
 }
+
+TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBox) { expect_two_palms_lift_a_big_box(PushModel::Fit); }
+
+// Under Wrap the closing that begins a grasp is the touching digits' (closes_on in grasp.cpp); two palms close on
+// the box by approaching each other, which that leaves as it was.
+TEST(Step, TwoFlatPalmsSqueezeAndLiftABigBoxUnderWrap) { expect_two_palms_lift_a_big_box(PushModel::Wrap); }
 
 // Dithering the thumb by +-1 mm every frame around first touch for 2 s: with the default hysteresis at most
 // one grasp begins and ends. Without hysteresis (1 frame each way, no release margin, no closing rule: the
