@@ -5,6 +5,7 @@
 
 namespace handsim {
 void bind_errors(pybind11::module_& m);
+void bind_named_errors(pybind11::module_& m);  // the C call wrapper handsim.argument_errors puts on every callable
 void bind_hand(pybind11::module_& m);
 void bind_glove(pybind11::module_& m);  // after bind_hand: takes and returns HandFrames
 void bind_step_report(pybind11::module_& m);  // before bind_world: World.step returns a StepReport

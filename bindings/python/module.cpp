@@ -14,6 +14,7 @@ PYBIND11_MODULE(_core, m) {
   m.attr("WITH_CERES") = false;
 #endif
   handsim::bind_errors(m);
+  handsim::bind_named_errors(m);
   handsim::bind_hand(m);
   handsim::bind_glove(m);
   handsim::bind_step_report(m);

@@ -106,8 +106,10 @@ const std::vector<uint32_t>& World::Impl::held_bodies() {
   held.erase(std::remove_if(held.begin(), held.end(),
                             [&](uint32_t bi) { return bi >= bodies.size() || !bodies[bi].alive || !bodies[bi].grasp.grasped; }),
              held.end());
-  std::sort(held.begin(), held.end());
-  held.erase(std::unique(held.begin(), held.end()), held.end());
+  if (held.size() > 1) {  // (a list of one, every frame a single body is held, is sorted and unique as it is)
+    std::sort(held.begin(), held.end());
+    held.erase(std::unique(held.begin(), held.end()), held.end());
+  }
   return held;
 }
 
