@@ -223,9 +223,7 @@ SkinContact skin_contact(const WorldDef& def, const ParticleContact& c, const Ha
   SkinContact s;
   s.point = c.point;
   s.normal = c.normal;
-  s.hand_velocity = closing ? hand.articulation.point_velocity(*hand.model, c.particle, c.point,
-                                                                def.grasp.velocity_window_s, def.grasp.velocity_window)
-                            : hand.history.point_velocity(c.point);
+  s.hand_velocity = closing ? particle_velocity(def, hand, c.particle, c.point) : hand.history.point_velocity(c.point);
   s.max_impulse = def.skin_pressure * compressed * area * dt;
   // A closing hand's finger that does not move into the body there did not press into it: the body came to it
   // (pushed by another finger) and its bone stops it, at any force, as the physical push's overlap removal does; the
@@ -283,8 +281,7 @@ bool wraps(const WorldDef& def, const HandSlot& hand) {
 // along -normal, over dt; never negative. The overlap of a hand that let go of the body (HandBodyPair::let_go)
 // is removed only this far: the rest is the grip's depth, which the hold left and the release did not push.
 double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, const ParticleContact& c, double dt) {
-  const Vec3 particle = hand.articulation.point_velocity(*hand.model, c.particle, c.point, def.grasp.velocity_window_s,
-                                                         def.grasp.velocity_window);
+  const Vec3 particle = particle_velocity(def, hand, c.particle, c.point);
   const Vec3 body = b.linear + b.angular.cross(c.point - b.pose.position);
   return std::max(0.0, (particle - body).dot(-c.normal) * dt);
 }

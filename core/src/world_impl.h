@@ -159,6 +159,14 @@ struct HandSlot : HandSlotModel, HandSlotState {
   uint64_t bullet_version = 0;
 };
 
+// A particle's own velocity at `point`, carried by its bone (ArticulationHistory::point_velocity over
+// GraspSettings::velocity_window_s, at most velocity_window samples): how Wrap measures a finger's motion, for the
+// closing finger's press and the let-go's overlap (pose_fit.cpp). Only where keeps_articulation(def).
+inline Vec3 particle_velocity(const WorldDef& def, const HandSlot& hand, int particle, const Vec3& point) {
+  return hand.articulation.point_velocity(*hand.model, particle, point, def.grasp.velocity_window_s,
+                                          def.grasp.velocity_window);
+}
+
 // One way a held body is inside static geometry (static_stop.cpp).
 struct StaticStop {
   Vec3 normal;   // push the held body along this (unit) ...
