@@ -286,13 +286,12 @@ double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, cons
   return std::max(0.0, (particle - body).dot(-c.normal) * dt);
 }
 
-// PushModel::Wrap: whether a closing hand's (`wraps`) contact `c` leaves a floating body (free, on no support) where
-// it is: a contact of a digit (a phalanx of the thumb or a finger: rigid_part other than the palm). In reach to grasp
-// the digits' closing is stopped at contact and the grip forms on the object without displacing it; the tracked digit
-// going on into the body is the recording of a hand that closed on nothing (the judge places its objects into
-// recordings made without them), not a push. The palm is carried by the arm and presses as before. A body on a
-// support is left to the press: its support and friction already bear a digit's press into it (docs/grasp.md "A
-// closing digit does not displace a floating body").
+// PushModel::Wrap: whether a closing hand's (`wraps`) contact `c` leaves a free body (no joint; resting on a support
+// or floating) where it is: a contact of a digit (a phalanx of the thumb or a finger: rigid_part other than the palm).
+// In reach to grasp the digits' closing is stopped at contact and the grip forms on the object without displacing it,
+// whether or not a table holds the object; the tracked digit going on into the body is the recording of a hand that
+// closed on nothing (the judge places its objects into recordings made without them), not a push. The palm is carried
+// by the arm and presses as before (docs/grasp.md "A closing digit does not displace a free body").
 bool forms_grip(const HandSlot& hand, const ParticleContact& c) { return rigid_part(*hand.model, c.particle) != kPalm; }
 
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame, from the pose `from` (b.pose, or where
@@ -497,7 +496,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     overlap.clear();
     scratch.support.clear();
     if (physical && !b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, scratch.support);
-    const bool floating = physical && !b.jointed() && scratch.support.empty();
+    const bool free_body = physical && !b.jointed();
     for (size_t e = first; e < end; ++e) {
       const auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
@@ -507,10 +506,10 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       const bool let_go = entry.second.let_go;
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
-        if (wrapping && floating && forms_grip(hand, c)) continue;
+        if (wrapping && free_body && forms_grip(hand, c)) continue;
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
-          // the hand is closing its grip (Wrap): then all of it is pulp, and its digits leave a floating body alone
+          // the hand is closing its grip (Wrap): then all of it is pulp, and its digits leave a free body alone
           // (forms_grip). A hand that let go of it removes only what it moved in this frame (moved_into).
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
           if (c.depth > skin && !wrapping) {

@@ -261,7 +261,7 @@ TEST(Step, WrapKeepsTheCubeTheClosingPinchShovesUnderThePhysicalPush) {
 }
 
 // PushModel::Wrap, a closing digit does not displace a floating body (docs/grasp.md "A closing digit does not
-// displace a floating body"): a still hand closes its thumb from 4 cm open onto the pinch over 20 frames (12 cm/s)
+// displace a free body"): a still hand closes its thumb from 4 cm open onto the pinch over 20 frames (12 cm/s)
 // and holds; halfway, with the span shrunk by 2 cm (more than closing_distance: the hand counts as closing), a cube
 // floating at rest in zero gravity is put where the pinch closes (the index pad 0.5 mm into its +x face, the thumb
 // still 2 cm short of its -x face). From then on only the closing hand's digits touch it and nothing else acts on it,

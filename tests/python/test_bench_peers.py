@@ -24,10 +24,9 @@ def test_peers_one_repetition():
 
 
 def test_the_cube_carry_pinch_grasps_under_wrap():
-    """The cube rests on the ground; the hand comes down with the thumb open and closes thumb and index on it. Under
-    PushModel.WRAP the closing thumb presses the cube at its own speed (docs/grasp.md "Wrap"), so the pair meets
-    opposite faces and grasps, as the fit's shove made them (and not the palm's speed, with which the supported cube
-    let the bones pass 32.7 mm in through the faces they entered by)."""
+    """The cube rests on the ground; the hand comes down with the thumb open and closes thumb and index pads on it.
+    Under PushModel.WRAP the closing digits leave the supported cube where it is (docs/grasp.md "A closing digit does
+    not displace a free body"), so the pads meet its opposite faces and grasp it where it rests."""
     cube = peers.HandsimCube(push_model=handsim.PushModel.WRAP)
     cube.build()  # raises when the pinch does not grasp
     assert np.linalg.norm(cube.offset) < 0.01

@@ -152,10 +152,14 @@ class HandsimLid:
 
 def _cube_pinch(world, hand, half):
     """A right hand pinching a cube of half extent `half` at the identity (the test_step.cpp pinch made for
-    Python): index curled 0.4 on the +x face, the other fingers in a fist, the thumb moved along the thumb-to-
-    index axis. Returns frame(cube_pose, closure) and the closure of the first opposing contacts."""
+    Python): index curled 0.1 on the +x face, the other fingers in a fist, the thumb moved along the thumb-to-
+    index axis. Returns frame(cube_pose, closure) and the closure of the first opposing contacts. The index is
+    nearly straight, not test_step.cpp's 0.4 on its 4 cm cube: on this 5 cm cube the 0.4 index touches the +x face
+    only with its middle bone's knuckle at the -z edge, and the thumb, lowered onto the top edge, is 32.7 mm deep
+    in the cube before it closes, so only a push that shoves the cube into the knuckle made it a grasp
+    (docs/grasp.md "Wrap as the default, measured" (e)); the 0.1 index's pad faces the thumb's."""
     R = handsim.Handedness.RIGHT
-    base = handsim.make_hand_frame(R, [0, 0, 0, 0, 0, 0, 1], curl=[0, 0.4, 1, 1, 1], thumb_opposition=0.2)
+    base = handsim.make_hand_frame(R, [0, 0, 0, 0, 0, 0, 1], curl=[0, 0.1, 1, 1, 1], thumb_opposition=0.2)
     pos, ori = np.array(base.positions), np.array(base.orientations)
     thumb, index = pos[5], pos[10]  # OpenXR: thumb tip, index tip
     axis = (index - thumb) / np.linalg.norm(index - thumb)
