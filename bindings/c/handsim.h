@@ -98,8 +98,8 @@ enum { HANDSIM_TERMINATION_CONVERGED = 0, HANDSIM_TERMINATION_MAX_ITERATIONS = 1
 enum { HANDSIM_LEFT = 0, HANDSIM_RIGHT = 1 };
 enum { HANDSIM_SAMPLING_RANDOM = 0, HANDSIM_SAMPLING_EVEN = 1 };
 enum { HANDSIM_CONTACTS_CLOSED_FORM = 0, HANDSIM_CONTACTS_BULLET_OBJECTS = 1 };
-/* WorldDef::push_model: eq. 2's fit as velocity (the default), or the pulp's bounded normal and friction impulses,
- * or those with a hand closing its grip only pressing (2.8). */
+/* WorldDef::push_model: eq. 2's fit as velocity, or the pulp's bounded normal and friction impulses, or those with a
+ * hand closing its grip only pressing (2.8; the default since session 17, before it HANDSIM_PUSH_FIT). */
 enum { HANDSIM_PUSH_FIT = 0, HANDSIM_PUSH_PHYSICAL = 1, HANDSIM_PUSH_WRAP = 2 };
 enum { HANDSIM_EVENT_CONTACT_BEGIN = 0, HANDSIM_EVENT_CONTACT_END = 1, HANDSIM_EVENT_GRASP_BEGIN = 2,
        HANDSIM_EVENT_GRASP_END = 3 };

@@ -130,8 +130,8 @@ void bind_defs(py::module_& m) {
       .def_readwrite("skin_pressure", &WorldDef::skin_pressure,
                      "Pa: the pulp's pressure at skin_depth of compression (it grows linearly up to it)")
       .def_readwrite("push_model", &WorldDef::push_model,
-                     "PushModel: how a hand moves a free body it touches but does not hold; FIT (the default), PHYSICAL "
-                     "or WRAP");
+                     "PushModel: how a hand moves a free body it touches but does not hold; FIT, PHYSICAL or WRAP "
+                     "(the default)");
   HS_VEC3_PROPERTY(wd, WorldDef, gravity, "world.gravity");
   flag_property(wd, "ground", &WorldDef::ground, "WorldDef.ground");
   flag_property(wd, "paper_pipeline", &WorldDef::paper_pipeline, "WorldDef.paper_pipeline",

@@ -416,7 +416,7 @@ static class CSharpTest
     {
         WorldSettings settings = WorldSettings.Default;
         Check(settings.Gravity.Y == -9.81 && settings.FixedSubstep == 1.0 / 240.0 && settings.Ground && settings.Grasp.CosThreshold == -0.7 &&
-              settings.SkinDepth == 0 && settings.SkinPressure == 20e3 && settings.PushModel == PushModel.Fit,
+              settings.SkinDepth == 0 && settings.SkinPressure == 20e3 && settings.PushModel == PushModel.Wrap,
               "C++ defaults");
         settings.SolverIterations = 12;
         using (var world = new World(settings))

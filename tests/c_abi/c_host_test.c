@@ -201,7 +201,7 @@ static void test_shapes_and_joints(void) {
 
   MUST(handsim_world_settings_default(&settings));
   CHECK(settings.gravity.y == -9.81 && settings.fixed_substep == 1.0 / 240.0 && settings.ground == 1 &&
-            settings.skin_depth == 0 && settings.skin_pressure == 20e3 && settings.push_model == HANDSIM_PUSH_FIT,
+            settings.skin_depth == 0 && settings.skin_pressure == 20e3 && settings.push_model == HANDSIM_PUSH_WRAP,
         "the defaults are not the C++ ones");
   settings.solver_iterations = 20;
   MUST(handsim_world_create(&settings, &world));

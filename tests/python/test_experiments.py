@@ -146,7 +146,7 @@ def test_a_rule_replaces_the_grasp_settings_and_the_push_but_not_the_conditions_
     assert wd.push_model == handsim.PushModel.PHYSICAL and wd.grasp.pinch_reach == 0.065
     assert wd.grasp.cos_threshold == -0.7
     assert X.world_def("exact", 0.7, rule="contacts").grasp.closing_distance == 0
-    assert X.world_def("exact", -0.7).push_model == handsim.PushModel.FIT
+    assert X.world_def("exact", -0.7).push_model == handsim.PushModel.WRAP
     with pytest.raises(ValueError, match="pinch_reach"):
         X.world_def("exact", -0.7, rule="bad:pinch_reach=-1")
     with pytest.raises(SystemExit):

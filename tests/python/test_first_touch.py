@@ -64,7 +64,7 @@ def test_skin_settings_round_trip_and_are_checked():
 
 
 def test_push_model_round_trips_and_is_checked():
-    assert handsim.WorldDef().push_model == handsim.PushModel.FIT
+    assert handsim.WorldDef().push_model == handsim.PushModel.WRAP
     d = handsim.WorldDef(push_model=handsim.PushModel.PHYSICAL)
     back = recording.world_def_from_dict(recording.world_def_to_dict(d))
     assert back.push_model == handsim.PushModel.PHYSICAL

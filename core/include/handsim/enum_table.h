@@ -76,11 +76,11 @@
 
 /* How a hand moves a free body it touches but does not hold (WorldDef::push_model; docs/grasp.md "Push models"). */
 #define HANDSIM_ENUM_PUSH_MODEL(X)                                                                        \
-  /* eq. 2 (default): the hands' velocity at the body plus the least-squares fit of the overlap, per frame */ \
+  /* eq. 2: the hands' velocity at the body plus the least-squares fit of the overlap, per frame */ \
   X(PushModel, Fit, 0, FIT, HANDSIM_PUSH_FIT)                                                             \
   /* the pulp's bounded normal and friction impulses; the overlap removed as a displacement, no velocity */ \
   X(PushModel, Physical, 1, PHYSICAL, HANDSIM_PUSH_PHYSICAL)                                             \
-  /* physical, but a hand closing its grip (GraspSettings::closing_distance) only presses: no overlap removed */ \
+  /* (default) physical, but a hand closing its grip (GraspSettings::closing_distance) only presses */ \
   X(PushModel, Wrap, 2, WRAP, HANDSIM_PUSH_WRAP)
 
 #define HANDSIM_ENUM_BODY_MOTION(X)                                                                       \
