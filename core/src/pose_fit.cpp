@@ -449,7 +449,7 @@ void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<J
 // also graze the base, and the base pushed by the hand that carries the lid hinged to it would be pushed by
 // itself (the experiments saw such a base thrown metres). The parts stay free for the other hand.
 StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
-                               const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
+                               const std::vector<HandSlot>& hands, HandBodyPairs& pairs,
                                const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
                                BulletBackend& backend, const BodyBoxes& boxes, PoseFitScratch& scratch, double dt) {
   const WorldDef& def = model.def;
@@ -474,7 +474,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
   // The touched bodies in slot order (the pairs are ordered by hand first), each with its pairs.
   auto& touched = scratch.touched;
   touched.clear();
-  for (const auto& entry : pairs)
+  for (auto& entry : pairs)
     if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
   std::stable_sort(touched.begin(), touched.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -498,7 +498,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
     if (physical && !b.jointed()) support_contacts(def, bodies, boxes, scratch.stop, b, scratch.support);
     const bool free_body = physical && !b.jointed();
     for (size_t e = first; e < end; ++e) {
-      const auto& entry = *touched[e].second;
+      auto& entry = *touched[e].second;
       if (holds_group_of(entry.first.first, bi)) continue;
       const size_t before = from.size();
       const HandSlot& hand = hands[entry.first.first];
@@ -506,7 +506,12 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       const bool let_go = entry.second.let_go;
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
-        if (wrapping && free_body && forms_grip(hand, c)) continue;
+        if (wrapping && free_body && forms_grip(hand, c)) {
+          // The overlap it leaves is the closing grip's depth, like a hold's: once the hand stops closing without a
+          // grasp, it goes only as the hand moves into the body (moved_into), not at once as a jump.
+          entry.second.let_go = true;
+          continue;
+        }
         if (physical) {
           // Every contact is pulp pressing and rubbing; the bone's overlap beyond the skin is removed below, unless
           // the hand is closing its grip (Wrap): then all of it is pulp, and its digits leave a free body alone

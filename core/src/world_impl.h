@@ -191,9 +191,10 @@ struct HandBodyPair {
   // whose centre is inside keep that face (see keep_entry_faces). `previous_faces` is last step's list.
   std::vector<EntryFace> entry_faces, previous_faces;
   bool opposing_alone = false;  // this step: eq. 3 over this hand's contacts alone (decide_grasps)
-  // PushModel::Wrap: this hand let go of this body and has touched it in every step since (the pair ends with its
-  // contacts). Its overlap then is the grip's, left by the hold, not a push: fit_touched_bodies moves the body out of
-  // it only as far as the hand moves into it (docs/grasp.md "Under Wrap": the let-go).
+  // PushModel::Wrap: this hand let go of this body, or its closing digits were left in the free body (forms_grip),
+  // and it has touched the body in every step since (the pair ends with its contacts; a grasp clears it). Its overlap
+  // then is the grip's, left by the hold or the closing, not a push: fit_touched_bodies moves the body out of it only
+  // as far as the hand moves into it (docs/grasp.md "Under Wrap": the let-go; "The jump when wrapping ends").
   bool let_go = false;
   // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1. The
   // hold path (docs/grasp.md "The hold path") collides only these two while the hand holds the body still.
@@ -350,7 +351,7 @@ struct PoseFitScratch {
   std::vector<SkinContact> support;  // where a pushed body rests on static geometry (PushModel::Physical)
   StaticStopScratch stop;            // support_contacts' query of the static geometry
   std::vector<std::pair<uint32_t, uint32_t>> held_groups;  // (hand, group root) of every held body
-  std::vector<std::pair<uint32_t, const HandBodyPairs::value_type*>> touched;  // (body, pair) of every touching pair
+  std::vector<std::pair<uint32_t, HandBodyPairs::value_type*>> touched;  // (body, pair) of every touching pair
 };
 
 // Scratch of decide_grasps (grasp.cpp), kept so that a step allocates nothing once it has grown.
@@ -539,9 +540,10 @@ StageReport simulate(const WorldModel& model, WorldState& state, std::vector<Bod
 // held_bodies()) moves out of the hands: by the fitted rigid motion (PushModel::Fitted) or the pulp's impulses and
 // the overlap's displacement (Physical; a body resting on static geometry, found through `boxes`, is held by its
 // support instead), as a velocity for the frame written to Bullet, or along its joint (project_push); the bodies
-// released this step (`released`) are done with after it.
+// released this step (`released`) are done with after it. Under Wrap a pair whose closing digits it left in a free
+// body is marked let go (HandBodyPair::let_go).
 StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodies, std::vector<Joint>& joints,
-                               const std::vector<HandSlot>& hands, const HandBodyPairs& pairs,
+                               const std::vector<HandSlot>& hands, HandBodyPairs& pairs,
                                const std::vector<uint32_t>& held, std::vector<uint32_t>& released,
                                BulletBackend& backend, const BodyBoxes& boxes, PoseFitScratch& scratch, double dt);
 

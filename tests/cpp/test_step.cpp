@@ -294,6 +294,41 @@ TEST(Step, WrapClosingDigitsLeaveAFloatingCubeWhereItIs) {
   }
 }
 
+// PushModel::Wrap, the jump when wrapping ends (docs/grasp.md "The jump when wrapping ends"): a still hand 1 cm to +x
+// of the pinch (the index pad 1 cm off the +x face, so no grasp) closes its thumb 3.4 cm over 20 frames into a cube
+// floating at rest in zero gravity, put in place once the hand counts as closing, and ends 4 mm inside its -x face;
+// then it holds still for 1 s, so that it stops counting as closing (closing_window_s) with its thumb in the cube.
+// While it closes, the thumb leaves the cube where it is (forms_grip); its overlap is the closing grip's depth, not a
+// push, so the pair counts as let go (HandBodyPair::let_go) and the still thumb, moving into the cube by nothing,
+// removes none of it: the cube stays exactly where it was put (the analytic answer: 0 m). Removing the overlap at once
+// when the wrapping ended (the tree before) moved it by the thumb's depth in one frame: 3.998 mm (a scratch switch).
+TEST(Step, WrapAClosingThumbThatStopsInAFreeCubeDoesNotMakeItJump) {
+  WorldDef def;
+  def.ground = false;
+  def.gravity = Vec3::Zero();
+  def.push_model = PushModel::Wrap;
+  Scene s(def);
+  const Pose hand_at = translation(Vec3(0.01, 0, 0)) * s.rest;
+  const double open = s.pinch.touch - 0.01 - 0.03, closed = s.pinch.touch - 0.01 + 0.004;
+  s.world.set_body_pose(s.box, translation(Vec3(0.5, 0, 0)) * s.rest);  // out of the hand's way
+  for (int i = 0; i < 30; ++i) s.step({s.pinch.frame(hand_at, open)});
+  for (int i = 1; i <= 20; ++i) {
+    if (i == 10) {
+      s.world.set_body_pose(s.box, s.rest);
+      s.world.set_body_velocity(s.box, Vec3::Zero(), Vec3::Zero());
+    }
+    s.step({s.pinch.frame(hand_at, open + (closed - open) * i / 20.0)});
+  }
+  const int touching = s.world.body_contact_count(s.box, s.hand);
+  for (int i = 0; i < 60; ++i) s.step({s.pinch.frame(hand_at, closed)});
+  const double moved = (s.world.body_pose(s.box).position - s.rest.position).norm();
+  std::printf("a still thumb stops closing 4 mm inside a floating cube, wrap push: the cube moved %.3f mm\n", moved * 1e3);
+  EXPECT_GT(touching, 0);
+  EXPECT_GT(s.world.body_contact_count(s.box, s.hand), 0);  // the thumb is still in it
+  EXPECT_EQ(count(s.log, EventType::GraspBegin), 0);
+  EXPECT_LT(moved, 1e-9);
+}
+
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
 // it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
 // gives the same opposing contacts and is not grasped, though GraspSettings::contacts() grasps it (the default, the
