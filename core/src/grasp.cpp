@@ -283,16 +283,12 @@ double hand_length(const HandModel& model) {
 void GripHistory::push(const GripTerms& terms, const Vec3& palm, double time, double window) {
   for (double term : terms) validate::finite(term, "span");
   validate::finite(palm, "palm");
-  push_windowed(samples_, Sample{sum_of(terms), terms, palm, time}, window);
+  push_windowed(samples_, Sample{terms, palm, time}, window);
 }
 
 bool GripHistory::in_time_order() const { return times_increase(samples_); }
 
-double GripHistory::closed_by() const {
-  double widest = 0;
-  for (const Sample& s : samples_) widest = std::max(widest, s.span);
-  return samples_.empty() ? 0.0 : widest - samples_.back().span;
-}
+double GripHistory::span() const { return samples_.empty() ? 0.0 : sum_of(samples_.back().terms); }
 
 double GripHistory::closed_by(unsigned terms) const {
   if (samples_.empty() || terms == 0) return 0.0;

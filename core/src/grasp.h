@@ -220,9 +220,9 @@ class GripHistory {
   void push(const GripTerms& terms, const Vec3& palm, double time, double window);
   void clear() { samples_.clear(); }
   bool empty() const { return samples_.empty(); }
-  double span() const { return samples_.empty() ? 0.0 : samples_.back().span; }
-  // How much the span shrank from its widest in the window to now (>= 0).
-  double closed_by() const;
+  double span() const;  // the newest sample's terms summed (grip_span)
+  // How much the span shrank from its widest in the window to now (>= 0): closed_by every term.
+  double closed_by() const { return closed_by(~0u); }
   // The same for the sum of the span's `terms` only (bit i: GripTerms[i], as touching_terms gives them); 0 without.
   double closed_by(unsigned terms) const;
   // How much the distance between this hand's palm and `other`'s shrank from its widest in the window to
@@ -236,7 +236,6 @@ class GripHistory {
   template <class Visitor, class Self>
   static void visit_state(Self& g, Visitor& v) {
     v.list(g.samples_, [&v](auto& s) {
-      v.state(s.span);
       for (auto& term : s.terms) v.state(term);
       v.state(s.palm);
       v.state(s.time);
@@ -245,8 +244,7 @@ class GripHistory {
 
  private:
   struct Sample {
-    double span = 0;  // the terms' sum (grip_span)
-    GripTerms terms{};
+    GripTerms terms{};  // the span is their sum (sum_of), not stored: one place for it
     Vec3 palm = Vec3::Zero();
     double time = 0;
   };
