@@ -251,7 +251,8 @@ class GripHistory {
   std::vector<Sample> samples_;  // oldest first; a few dozen at most
 };
 
-// The last few palm poses of a hand, for the velocity a released object is thrown with.
+// The last few palm poses of a hand, for the velocity a released object is thrown with; under Wrap also a body's
+// poses (BodyState::path), for the let-go's measure of its motion.
 // Velocities are least-squares slopes over the samples of the last `span` seconds (GraspSettings::velocity_window_s;
 // 0: all kept): exact for constant linear and angular velocity, and a single jittery sample moves them less than a
 // two-sample difference would. Rotation between the oldest and newest sample used must stay below pi (over 0.05 s:
@@ -268,6 +269,7 @@ class HandMotionHistory {
   int size() const { return count_; }
   int window() const { return static_cast<int>(samples_.size()); }
   bool has_velocity() const { return count_ >= 2; }  // below that, the velocities are zero
+  double newest_time() const { return count_ > 0 ? sample(0).time : 0.0; }  // 0 when empty
 
   // Both are slopes over the samples of the last `span` seconds, evaluated once per push (the step asks for them
   // per pair and per held body).

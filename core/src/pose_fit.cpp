@@ -276,14 +276,32 @@ bool wraps(const WorldDef& def, const HandSlot& hand) {
          hand.grip.closed_by() >= def.grasp.closing_distance;
 }
 
+// The body's velocity as the let-go measures it (moved_into): the least-squares slope of its path (BodyState::path)
+// over the window a particle's is measured over, ending when the particle's does, at this frame's end, where the
+// body's own velocity carries it. Moving into a body is relative motion, so both sides are measured alike. Its
+// one-step velocity would not do: held up to the release, that is the hand's last step, in which one tracker jump of
+// the grip reads jump / dt (5 deg in one 60 Hz step: 310 deg/s, docs/grasp.md "Under Wrap", frame rates), while the
+// fingers carried by the same jump read it over the window; the difference counted as the fingers moving into the
+// body by an amount that depended on which frame held the jump. Nor would the path alone: its newest pose is the
+// last frame's end, one frame behind the particles', so a jump it made in its last step counted against fingers that
+// had made it too. Its own velocity where it has no path yet.
+BodyVelocity let_go_velocity(const Body& b, double dt) {
+  if (b.path.size() == 0) return {b.linear, b.angular};
+  HandMotionHistory ahead = b.path;
+  ahead.push(advanced(b.pose, b.linear, b.angular, dt), b.path.newest_time() + dt);
+  return {ahead.linear_velocity(), ahead.angular_velocity()};  // of its origin, as b.linear and b.angular are
+}
+
 // How far contact `c`'s particle moved into `b` through its face this frame: the particle's own velocity (its bone's
-// motion, palm and articulation together, as Wrap's press measures a closing finger's) less the body's at the point,
-// along -normal, over dt; never negative. The overlap of a hand that let go of the body (HandBodyPair::let_go)
-// is removed only this far: the rest is the grip's depth, which the hold left and the release did not push.
-double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, const ParticleContact& c, double dt) {
+// motion, palm and articulation together, as Wrap's press measures a closing finger's) less the body's at the point
+// (`body`, let_go_velocity), along -normal, over dt; never negative. The overlap of a hand that let go of the body
+// (HandBodyPair::let_go) is removed only this far: the rest is the grip's depth, which the hold left and the release
+// did not push.
+double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, const BodyVelocity& body,
+                  const ParticleContact& c, double dt) {
   const Vec3 particle = particle_velocity(def, hand, c.particle, c.point);
-  const Vec3 body = b.linear + b.angular.cross(c.point - b.pose.position);
-  return std::max(0.0, (particle - body).dot(-c.normal) * dt);
+  const Vec3 at = body.linear + body.angular.cross(c.point - b.pose.position);
+  return std::max(0.0, (particle - at).dot(-c.normal) * dt);
 }
 
 // PushModel::Wrap: whether a closing hand's (`wraps`) contact `c` leaves a free body (no joint; resting on a support
@@ -504,6 +522,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
       const HandSlot& hand = hands[entry.first.first];
       const bool wrapping = physical && wraps(def, hand);
       const bool let_go = entry.second.let_go;
+      const BodyVelocity body = let_go ? let_go_velocity(b, dt) : BodyVelocity{};
       for (const ParticleContact& c : entry.second.contacts) {
         if (c.depth <= 0) continue;
         if (wrapping && free_body && forms_grip(hand, c)) {
@@ -518,7 +537,7 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
           // (forms_grip). A hand that let go of it removes only what it moved in this frame (moved_into).
           pressed.push_back(skin_contact(def, c, hand, dt, kPulpFriction, wrapping));
           if (c.depth > skin && !wrapping) {
-            const double bone = let_go ? std::min(c.depth - skin, moved_into(def, hand, b, c, dt)) : c.depth - skin;
+            const double bone = let_go ? std::min(c.depth - skin, moved_into(def, hand, b, body, c, dt)) : c.depth - skin;
             if (bone > 0) overlap.push_back({c.point, c.normal, -c.normal * bone, kUnbounded, 0.0});
           }
           continue;

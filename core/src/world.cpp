@@ -157,6 +157,7 @@ BodyId World::add_body(const BodyDef& in) {
   b.linear = b.motion == BodyMotion::Static ? Vec3::Zero() : def.linear_velocity;
   b.angular = b.motion == BodyMotion::Static ? Vec3::Zero() : def.angular_velocity;
   b.unit_inertia = shape_unit_inertia(def.shape);
+  b.path = HandMotionHistory(w.def.grasp.velocity_window, w.def.grasp.velocity_window_s);
   b.backend = w.backend->add(def, b.motion);
   ++w.body_version;
   ++w.motion_version;
@@ -368,6 +369,7 @@ void World::set_body_pose(BodyId id, const Pose& pose) {
   impl_->update_box(impl_->bodies, id.index);
   if (!impl_->joint_order.empty()) place_children(*impl_, impl_->joints, impl_->bodies, *impl_->backend);
   impl_->refresh_moving_boxes();
+  impl_->forget_body_paths();
 }
 
 void World::set_body_velocity(BodyId id, const Vec3& linear, const Vec3& angular) {

@@ -64,6 +64,16 @@ void BodyBoxes::sort_boxes() const {
   box_order_dirty = false;
 }
 
+void World::Impl::record_body_paths(double time) {
+  if (!keeps_body_paths(def)) return;
+  for (Body& b : bodies)
+    if (b.manipulable()) b.path.push(b.pose, time);
+}
+
+void World::Impl::forget_body_paths() {
+  for (Body& b : bodies) b.path.clear();
+}
+
 // The bodies whose pose the step or the API moves outside Bullet: held bodies (they follow their hand) and
 // hard joints' children (placed from their joint). Bodies Bullet moves get their box when read
 // (read_dynamic_bodies), bodies the API moves in set_body_pose / add_body.

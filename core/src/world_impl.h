@@ -56,6 +56,11 @@ struct BodyState {
   bool just_released = false;
   // Dynamic: Bullet had it asleep when last read, so it has not moved since (read_dynamic_bodies).
   bool read_asleep = false;
+  // PushModel::Wrap: the body's poses at the ends of the last steps, over GraspSettings::velocity_window_s (a
+  // HandMotionHistory of its pose; the world's velocity_window samples at most), so that the let-go reads a
+  // particle's motion into the body against the body's own over the same window (moved_into). Recorded, saved and
+  // hashed under Wrap only (keeps_body_paths).
+  HandMotionHistory path;
 
   // Whether the hand in slot `hand` holds this body, as primary or secondary. (A null secondary id has
   // index 0 too, so comparing indices alone would make hand slot 0 hold every singly held body.)
@@ -127,6 +132,10 @@ struct HandSlotModel {
 inline bool keeps_articulation(const WorldDef& def) {
   return def.grasp.squeeze_distance > 0 || def.push_model == PushModel::Wrap;
 }
+
+// Whether a world's bodies keep their path (BodyState::path): Wrap's let-go reads it. One test for what records it
+// (record_body_paths) and what saves and hashes it (world_state.cpp), as keeps_articulation is.
+inline bool keeps_body_paths(const WorldDef& def) { return def.push_model == PushModel::Wrap; }
 
 // A hand's state: the tracked frame's bones and palm, the histories the grasp rules read, and the particle
 // caches (skinned from the bones, deformed from the contacts; saved so a restored world reads back the same).
@@ -456,6 +465,10 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
 
   // What moves (world_activity.cpp).
   void refresh_moving_boxes();
+  // Under keeps_body_paths: each manipulable body's pose at `time`, the end of the step (BodyState::path).
+  void record_body_paths(double time);
+  // A pose set from outside (set_body_pose, set_joint_value) is no motion: every body's path starts again there.
+  void forget_body_paths();
   const std::vector<uint32_t>& held_bodies();
   const std::vector<uint32_t>& dynamic_bodies();
 };

@@ -654,6 +654,7 @@ void World::set_joint_value(JointId id, double value) {
   const double upper = j.type == JointType::Hinge ? j.hinge.upper : j.slider.upper;
   j.value = std::clamp(value, lower, upper);
   j.rate = 0;
+  w.forget_body_paths();
   if (j.model == JointModel::Hard) {
     place_children(w, w.joints, w.bodies, *w.backend);
     return;

@@ -271,7 +271,7 @@ template <class V, class Face> void visit_face(V& v, Face& f, uint32_t particles
 // keeps_articulation(def), so a world without that history saves and hashes as before.
 template <class W, class T> using Const = std::conditional_t<std::is_const_v<W>, const T, T>;
 
-template <class S, class V> void visit_body(S& b, V& v) {
+template <class S, class V> void visit_body(S& b, V& v, bool paths) {
   v.state(b.pose);
   v.state(b.synced_pose);
   v.state(b.linear);
@@ -285,6 +285,7 @@ template <class S, class V> void visit_body(S& b, V& v) {
   v.state(b.supported);
   v.state(b.just_released);
   v.state(b.read_asleep);
+  if (paths) std::remove_const_t<std::remove_reference_t<decltype(b.path)>>::visit_state(b.path, v);
 }
 
 template <class S, class V> void visit_joint(S& j, V& v) {
@@ -334,7 +335,7 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
   for (uint32_t i = 0; i < w.bodies.size(); ++i) {
     if (!w.bodies[i].alive) continue;
     v.mark(uint64_t(i) << 1 | 1u);
-    visit_body<Const<W, BodyState>>(w.bodies[i], v);
+    visit_body<Const<W, BodyState>>(w.bodies[i], v, keeps_body_paths(w.def));
   }
   for (auto& j : w.joints)
     if (j.alive) visit_joint<Const<W, JointSlotState>>(j, v);
@@ -459,6 +460,7 @@ std::string World::Impl::inconsistency() const {
     if (!(b.pose.position.cwiseAbs().maxCoeff() <= validate::kMaxCoordinate) ||
         !(std::max(b.linear.norm(), b.angular.norm()) <= validate::kMaxSpeed))
       return body + " is beyond the bounds of a pose or speed";
+    if (!b.path.in_time_order()) return body + " has a path out of time order";
   }
   for (uint32_t i = 0; i < hands.size(); ++i) {
     const HandSlot& h = hands[i];

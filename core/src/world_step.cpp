@@ -52,6 +52,7 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Slip, [&] { return retake_secondary_hands(w.held_bodies(), w.bodies, w.hands); });  // line 20: eq. 5
   w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
   if (w.report.nonfinite_bodies > 0) w.report.warnings |= warning_bit(StepWarning::NonFiniteRecovered);
+  w.record_body_paths(w.time + dt);  // the let-go's measure of the bodies' motion (BodyState::path)
   w.time += dt;
   w.step_events = w.events.size();
   return w.report;
