@@ -283,10 +283,10 @@ double hand_length(const HandModel& model) {
 void GripHistory::push(const GripTerms& terms, const Vec3& palm, double time, double window) {
   for (double term : terms) validate::finite(term, "span");
   validate::finite(palm, "palm");
-  push_windowed(samples_, Sample{terms, palm, time}, window);
+  samples_.push(Sample{terms, palm, time}, window);
 }
 
-bool GripHistory::in_time_order() const { return times_increase(samples_); }
+bool GripHistory::in_time_order() const { return samples_.in_time_order(); }
 
 double GripHistory::span() const { return samples_.empty() ? 0.0 : sum_of(samples_.back().terms); }
 
@@ -354,10 +354,10 @@ double centred_times(int n, const TimeOf& time_of, const Add& add) {
 // Squeeze: the hand's articulation carrying an opposing pair into the body
 
 void ArticulationHistory::push(const Bones& bones, double time, double window) {
-  push_windowed(samples_, Sample{bones, time}, window);
+  samples_.push(Sample{bones, time}, window);
 }
 
-bool ArticulationHistory::in_time_order() const { return times_increase(samples_); }
+bool ArticulationHistory::in_time_order() const { return samples_.in_time_order(); }
 
 namespace {
 // x -> B^-1 x for a rigid B = [R | t].

@@ -120,12 +120,16 @@ def _lid_errors(lid_pos, lid_quat, angle_target, angle):
 class HandsimLid:
     name = "handsim"
 
-    def __init__(self, particles=None):
+    def __init__(self, particles=None, push_model=None):
         self.particles = particles
+        self.push_model = push_model  # None: WorldDef's default
         self.label = "handsim" if particles is None else f"handsim ({particles} particles)"
 
     def build(self):
-        world = handsim.World(handsim.WorldDef())
+        wd = handsim.WorldDef()
+        if self.push_model is not None:
+            wd.push_model = self.push_model
+        world = handsim.World(wd)
         d = handsim.JewelryBoxDef()
         d.position, d.base_mass, d.table = [0, 0, 0], 0.0, False  # the fixed base of the peers' scene
         box = handsim.build_jewelry_box(world, d)
@@ -725,10 +729,15 @@ def contact_changes_table(result):
 COUNTED = "functools_reduce"  # the C function the counted frames run inside (callgrind --toggle-collect)
 
 
-def _frames_only(scene, label, repeats):
-    """Builds the engine `label` of `scene` and runs its frames inside functools.reduce, `repeats` times."""
+def _frames_only(scene, label, repeats, push_model=None):
+    """Builds the engine `label` of `scene` and runs its frames inside functools.reduce, `repeats` times
+    (a handsim engine with `push_model`, a PushModel name, when given)."""
     make = next(m for lab, m, _ in engines(scene) if lab == label)
     engine = make()
+    if push_model is not None:
+        if not hasattr(engine, "push_model"):
+            raise ValueError(f"--push-model: {label} is not a handsim engine")
+        engine.push_model = handsim.PushModel.__members__[push_model.upper()]
     for _ in range(repeats):
         engine.build()
         functools.reduce(lambda _, i: engine.frame(i), range(FRAMES), None)
@@ -803,11 +812,13 @@ def main(argv=None):
                         help="per handsim engine: the held body's touching contacts and how their depths change "
                              "between consecutive frames")
     parser.add_argument("--frames", nargs=2, metavar=("SCENE", "ENGINE"), help="run one engine's frames only")
+    parser.add_argument("--push-model", choices=[m.lower() for m in handsim.PushModel.__members__],
+                        help="with --frames: the handsim engine's WorldDef.push_model (default: WorldDef's)")
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--doc", type=Path, default=None, metavar="DIR", help="docs folder to write the table into")
     args = parser.parse_args(argv)
     if args.frames:
-        _frames_only(args.frames[0], args.frames[1], args.repeats)
+        _frames_only(args.frames[0], args.frames[1], args.repeats, args.push_model)
     elif args.contact_changes:
         print(contact_changes_table(contact_changes()))
     elif args.count:
