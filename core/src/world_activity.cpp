@@ -64,14 +64,27 @@ void BodyBoxes::sort_boxes() const {
   box_order_dirty = false;
 }
 
+// Only the let-go reads a path (let_go_velocity), for a pair that touched the body in every step since its hand let
+// go or its closing digits were left in it (HandBodyPair::let_go): so the bodies in a pair are the ones whose path
+// can be read, and a body no hand is on starts its path again when one touches it. A settled world with no hand
+// near records nothing.
 void World::Impl::record_body_paths(double time) {
   if (!keeps_body_paths(def)) return;
-  for (Body& b : bodies)
-    if (b.manipulable()) b.path.push(b.pose, time);
+  pathed_next.clear();
+  for (const auto& entry : pairs)
+    if (bodies[entry.first.second].manipulable()) pathed_next.push_back(entry.first.second);
+  std::sort(pathed_next.begin(), pathed_next.end());
+  pathed_next.erase(std::unique(pathed_next.begin(), pathed_next.end()), pathed_next.end());
+  for (uint32_t bi : pathed)  // no hand on it now: its motion until one touches it again is no part of its path
+    if (bi < bodies.size() && !std::binary_search(pathed_next.begin(), pathed_next.end(), bi)) bodies[bi].path.clear();
+  for (uint32_t bi : pathed_next) bodies[bi].path.push(bodies[bi].pose, time);
+  pathed.swap(pathed_next);
 }
 
 void World::Impl::forget_body_paths() {
-  for (Body& b : bodies) b.path.clear();
+  for (uint32_t bi : pathed)
+    if (bi < bodies.size()) bodies[bi].path.clear();
+  pathed.clear();
 }
 
 // The bodies whose pose the step or the API moves outside Bullet: held bodies (they follow their hand) and

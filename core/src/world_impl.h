@@ -345,6 +345,9 @@ struct MovingBodies {
   std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
   std::vector<uint32_t> released;  // bodies whose just_released is set
   std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
+  // Bodies whose path holds samples (BodyState::path): those of a hand-body pair at the last step's end
+  // (record_body_paths), in slot order. May name a removed body (its path was reset when the slot was filled).
+  std::vector<uint32_t> pathed, pathed_next;
   uint64_t motion_version = 1, dynamic_version = 0;
 };
 
@@ -465,7 +468,8 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
 
   // What moves (world_activity.cpp).
   void refresh_moving_boxes();
-  // Under keeps_body_paths: each manipulable body's pose at `time`, the end of the step (BodyState::path).
+  // Under keeps_body_paths: the pose at `time`, the end of the step, of each manipulable body a hand touches or
+  // holds (in a pair); the path of a body no hand is on any more starts again (BodyState::path).
   void record_body_paths(double time);
   // A pose set from outside (set_body_pose, set_joint_value) is no motion: every body's path starts again there.
   void forget_body_paths();

@@ -559,10 +559,12 @@ void World::Impl::restore_state(const uint8_t* data, size_t size, bool keep_even
   // What follows from the state.
   held.clear();
   released.clear();
+  pathed.clear();
   for (uint32_t i = 0; i < bodies.size(); ++i) {
     if (!bodies[i].alive) continue;
     if (bodies[i].grasp.grasped) held.push_back(i);
     if (bodies[i].just_released) released.push_back(i);
+    if (bodies[i].path.size() > 0) pathed.push_back(i);
     update_box(bodies, i);
   }
   box_order_dirty = true;

@@ -377,3 +377,41 @@ TEST(State, WrapHistoryIsSavedAndRestored) {
   def.push_model = PushModel::Wrap;
   expect_articulation_saved(def);
 }
+
+// Only the let-go reads a body's path (BodyState::path), for a body a hand is on, so only the bodies of a hand-body
+// pair keep one (record_body_paths): boxes falling and settling with no hand record nothing (issue 25 item 3: a
+// world of settled bodies paid a path refit per body per step), and in the determinism scenario a body has a path
+// exactly when a hand touches or holds it.
+TEST(State, OnlyTheBodiesAHandIsOnKeepAPath) {
+  WorldDef def;
+  def.push_model = PushModel::Wrap;  // the push that keeps paths
+  World settled(def);
+  std::vector<BodyId> boxes;
+  for (int i = 0; i < 20; ++i) {
+    BodyDef d;
+    d.shape = ShapeDef::box(Vec3::Constant(0.025));
+    d.mass = 0.2;
+    d.pose.position = Vec3(0.1 * (i % 5), 0.1, 0.1 * (i / 5));  // dropped 7.5 cm onto the ground
+    boxes.push_back(settled.add_body(d));
+  }
+  for (int i = 0; i < 240; ++i) {
+    settled.step(1.0 / 60.0, std::vector<HandInput>{});
+    for (const Body& b : WorldInternals::of(settled).bodies) ASSERT_EQ(b.path.size(), 0) << "frame " << i;
+  }
+  for (BodyId b : boxes) EXPECT_NEAR(settled.body_pose(b).position.y(), 0.025, 0.002) << "fell and settled";
+
+  Scene s;  // the determinism scenario, Wrap being the default
+  ASSERT_EQ(WorldDef{}.push_model, PushModel::Wrap);
+  int with_path = 0;
+  for (int i = 0; i < 400; ++i) {
+    s.step(i);
+    const auto& w = WorldInternals::of(s.world);
+    for (uint32_t bi = 0; bi < w.bodies.size(); ++bi) {
+      bool touched = false;
+      for (const auto& entry : w.pairs) touched = touched || entry.first.second == bi;
+      ASSERT_EQ(w.bodies[bi].path.size() > 0, touched && w.bodies[bi].manipulable()) << "frame " << i << " body " << bi;
+      with_path += w.bodies[bi].path.size() > 0;
+    }
+  }
+  EXPECT_GT(with_path, 0) << "the hands touch the lid";
+}
