@@ -288,6 +288,12 @@ HandReach build_hand_reach(const HandModel& model) {
     r.group_centre.push_back(centre);
     r.group_radius.push_back(radius * (1 + 1e-12) + 1e-12);  // rounding of B_k p never leaves the ball
   }
+  for (size_t g = 0; g < L.groups.size(); ++g)
+    for (int k = 0; k < L.groups[g].count; ++k) {
+      const int bone = L.groups[g].bones[k];
+      r.group_excess = std::max(r.group_excess, (r.group_centre[g] - r.bind_joint[bone]).norm() + r.group_radius[g] +
+                                                    model.particle_radius - r.reach[bone]);
+    }
   // Spans: maximal runs of groups with the same bones; a span's ball holds its groups' balls.
   for (size_t g = 0; g < L.groups.size(); ++g) {
     const SkinGroup& a = L.groups[g];
@@ -339,6 +345,14 @@ void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransfo
     const Vec3 c = bones[k].leftCols<3>() * reach.bind_joint[k] + bones[k].col(3);
     lo = lo.cwiseMin(c - Vec3::Constant(reach.reach[k]));
     hi = hi.cwiseMax(c + Vec3::Constant(reach.reach[k]));
+  }
+}
+
+void hold_group_boxes(const HandReach& reach, Vec3& lo, Vec3& hi) {
+  for (int d = 0; d < 3; ++d) {
+    const double l = lo[d] - reach.group_excess, u = hi[d] + reach.group_excess;
+    lo[d] = l - 1e-9 * (1 + std::abs(l));  // rounding in world coordinates: ~1e-16 of them
+    hi[d] = u + 1e-9 * (1 + std::abs(u));
   }
 }
 
@@ -448,6 +462,18 @@ int HandParticles::skin_particles_in_reach(HandSlot& h) {
   }
   h.state.tracked_positions.resize(3, Eigen::Index(layout.bind_xyz[0].size()));
   h.group_bounds.resize(6 * layout.groups.size());
+  h.reach_groups.clear();
+  h.reach_groups_only = true;
+  if (near_boxes.empty()) {
+    // No body to reach (the hand's only body near is the one it holds still): no group is skinned, and the
+    // loop below would only make the hand's bounds from the groups' boxes. The coarse bounds grown by the groups'
+    // excess over them (hold_group_boxes) hold every group's box grown by the particle radius, so a body they leave out (detect_contacts, or this function again when
+    // the witness lets go) is out of every group's reach, as it is with the loop's bounds. The groups' boxes are
+    // left as they are: only reach_groups' are read while reach_groups_only.
+    hold_group_boxes(h.reach, h.state.bounds_lo, h.state.bounds_hi);
+    h.particles_current = false;
+    return 0;
+  }
   auto in_reach = [&](const double* box) {
     for (size_t j = 0; j < near_boxes.size(); j += 6)
       if (box[0] - reach <= near_boxes[j + 3] && box[1] - reach <= near_boxes[j + 4] &&
@@ -468,7 +494,6 @@ int HandParticles::skin_particles_in_reach(HandSlot& h) {
   int count = 0;
   bool all = true;
   const HandReach& r = h.reach;
-  h.reach_groups.clear();
   for (size_t s = 0; s + 1 < r.span_first.size(); ++s) {
     const size_t first = r.span_first[s], last = r.span_first[s + 1];
     // A span of one group is tested as that group: its ball holds the one group's ball, so its box would only
@@ -501,7 +526,6 @@ int HandParticles::skin_particles_in_reach(HandSlot& h) {
   h.state.bounds_lo = lo.array() - m.particle_radius;
   h.state.bounds_hi = hi.array() + m.particle_radius;
   h.particles_current = all;
-  h.reach_groups_only = true;
   return count;
 }
 

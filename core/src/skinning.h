@@ -64,10 +64,18 @@ struct HandReach {
   std::vector<size_t> span_first;
   std::vector<Vec3> span_centre;
   std::vector<double> span_radius;
+  // How far a group's coarse box (coarse_bounds) grown by the particle radius may reach past its bones' particle
+  // reach: the most, over the groups and their bones, of |group_centre - bind_joint| + group_radius + particle
+  // radius - reach. The box of coarse_particle_bounds grown by it holds every group's coarse box grown by the
+  // particle radius.
+  double group_excess = 0;
 };
 HandReach build_hand_reach(const HandModel& model);
 void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
                             Vec3& lo, Vec3& hi);
+// Grows a box of coarse_particle_bounds to hold every group's coarse box grown by the particle radius
+// (HandReach::group_excess, and a slack for rounding).
+void hold_group_boxes(const HandReach& reach, Vec3& lo, Vec3& hi);
 // A box sure to hold the centres of the points within `radius` of `centre` (bind pose) blended from the bones
 // of `group`, from the bones alone (no particle radius): a group's (group_centre) or a span's.
 void coarse_bounds(const SkinGroup& group, const Vec3& centre, double radius,

@@ -151,6 +151,7 @@ struct HandSlotState {
   bool particles_current = true;    // state.tracked_positions belong to the last tracked frame
   bool deformed_current = true;     // state.deformed_positions hold this frame's deformation (else == tracked)
   std::vector<double> group_bounds; // box of each particle group's centres (6 per group); empty: not skinned
+                                    // (while reach_groups_only, only reach_groups' boxes are current)
   std::vector<uint32_t> reach_groups;  // the groups skin_particles_in_reach skinned, ascending
   bool reach_groups_only = false;      // only reach_groups have boxes (else every group has its exact box)
   std::vector<Vec3> displaced_centres;  // deformed centre of each of state.displaced (deform_hands)

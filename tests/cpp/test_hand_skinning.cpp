@@ -222,6 +222,39 @@ TEST(HandSkinning, CoarseBoundsHoldEveryParticle) {
   }
 }
 
+// The coarse box grown by the groups' excess holds every group's coarse box grown by the particle radius, near
+// the origin and a kilometre away (the hand's bounds when no body is within reach of any group: they must
+// leave out no body a group could reach).
+TEST(HandSkinning, CoarseBoundsHeldGroupBoxesHoldEveryGroupBox) {
+  const HandModel& m = right_model();
+  const HandReach reach = build_hand_reach(m);
+  EXPECT_GT(reach.group_excess, 0.0);
+  EXPECT_LT(reach.group_excess, 0.05);  // a hand-sized growth, or the bounds would cull nothing
+  for (int trial = 0; trial < 16; ++trial) {
+    HandPoseParams p;
+    p.curl = {0.06 * trial, 0.065 * trial, 0.05 * trial, 0.055 * trial, 0.0625 * trial};
+    p.thumb_opposition = 0.06 * trial;
+    p.spread = 0.5 - 0.075 * trial;
+    Pose at = some_pose();
+    if (trial % 2) at.position += Vec3(1e3, -7e2, 3e2);
+    HandFrame f = make_hand_frame(Handedness::Right, at, p);
+    if (trial % 3 == 0) f.joints[kMiddleIntermediate].valid = false;
+    HandState s;
+    pose_hand(m, f, s);
+    Vec3 lo, hi;
+    coarse_particle_bounds(reach, s.bones, lo, hi);
+    hold_group_boxes(reach, lo, hi);
+    for (size_t g = 0; g < m.particle_skin.groups.size(); ++g) {
+      double box[6];
+      coarse_bounds(m.particle_skin.groups[g], reach.group_centre[g], reach.group_radius[g], s.bones, box);
+      for (int d = 0; d < 3; ++d) {
+        EXPECT_LE(lo[d], box[d] - m.particle_radius) << "trial " << trial << " group " << g;
+        EXPECT_GE(hi[d], box[3 + d] + m.particle_radius) << "trial " << trial << " group " << g;
+      }
+    }
+  }
+}
+
 TEST(HandSkinning, UntrackedFrameKeepsTheLastPose) {
   const HandModel& m = right_model();
   HandState s;
