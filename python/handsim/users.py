@@ -16,8 +16,8 @@ Tasks (``task``, ``hands``):
   without ever meaning to grasp it (the trials that count false grasps).
 * ``hands == 2``: the left hand holds the base at its left end first (palm towards the left face, fingers
   curled into the base: eq. 3 grasps it) and keeps holding it while the right hand works, as in the paper's
-  Fig. 6. The glove picks the left hand up where it already rests beside the base (the paper's subjects
-  picked the box up first; the reach of the left hand is not simulated).
+  Fig. 6. It reaches open from its rest on the user's left to beside the base's left face and closes its grip
+  there, as a person's hand reaches a box before it holds it: the tracker sees the whole reach.
 
 Every random choice comes from ``numpy.random.default_rng(seed)``: the same seed gives the same user and,
 with the same world, the same frames.
@@ -233,6 +233,7 @@ class SimulatedUser:
         self._waypoints = None
         self._start_angle = 0.0
         self._left_hold = None
+        self._left_rest = None
         self._thumb_fix = self._thumb_compensation()
         self._openness = 1.0  # how open the right hand's grip is (HandShape.opened): it starts open
         self._reach_openness = 1.0  # and at the start of the current reach
@@ -291,6 +292,13 @@ class SimulatedUser:
         q = quat_mul(base[3:], BASE_HOLD_ROTATION)
         return np.concatenate([p, q])
 
+    def _left_rest_pose(self):
+        """Where the left hand starts its reach: LEFT_REST from where it holds the base (box frame), turned as there."""
+        base = self._base()
+        p = self._left_hold_pose()
+        p[:3] += quat_rotate(base[3:], LEFT_REST)
+        return p
+
     def _set(self, phase):
         self.phase, self.phase_t = phase, 0.0
 
@@ -312,14 +320,16 @@ class SimulatedUser:
         p = self.p
         self.intent_hold = False
 
-        # The left hand (two-hand trials): reach to the base's left end, close the grip, keep holding.
+        # The left hand (two-hand trials): reach open from its rest to beside the base's left end, close the grip
+        # there, keep holding.
         left_pose, left_shape = None, FLAT_HAND
         if self.left is not None:
             if self._left_hold is None:
                 self._left_hold = self._left_hold_pose()
+                self._left_rest = self._left_rest_pose()
             if self.phase == "left_reach":
                 if self.phase_t < d["left_reach"]:
-                    left_pose = None  # the glove picks the left hand up only once it is at the base
+                    left_pose = lerp_pose(self._left_rest, self._left_hold, min_jerk(self.phase_t / d["left_reach"]))
                 else:
                     left_pose = self._left_hold
                     left_shape = BASE_HOLD.opened(1 - min_jerk((self.phase_t - d["left_reach"]) / d["left_grip"]))
@@ -431,11 +441,17 @@ class SimulatedUser:
         return frames
 
 
-# Left hand holding the base (box frame): palm centre 1.5 cm outside the left face, 2 cm below the base's
-# middle and 2 cm towards the front, palm facing +X, fingers towards the back, curled into the base. A search
-# over poses and shapes (2 cm grid, curl 0.4-0.8, opposition 0-1, the hand appearing in place) found this one
-# grasping the base by eq. 3 without touching the lid and moving the base by 2 mm. Virtual fingers curl into
-# the box (nothing stops them); the grasp comes from the opposing penetration directions inside it. A left
-# hand that slides in from the side or from above pushes the base or catches the lid first.
-BASE_HOLD_OFFSET = (-0.015, -0.02, 0.02)
+# Left hand holding the base (box frame): palm centre 3.5 cm outside the left face, 2 cm below the base's
+# middle and 2 cm towards the front, palm facing +X, fingers towards the back, curled into the base. Virtual
+# fingers curl into the box (nothing stops them); the grasp comes from the opposing penetration directions inside
+# it. The hand arrives open and closes there, so the open hand must be clear of the box: 1.5 cm outside (the pose a
+# search once found for a hand that appeared in place) the open hand lay 169 particles deep in the base and 47 in
+# the lid, 2 cm further out it touches neither (a /tmp script stepping the open and the closed BASE_HOLD at 0-3 cm
+# further out; closed it reaches 238 particles into the base). A hand that closed while it still came in carried
+# the base it had grasped on with it (10 mm).
+BASE_HOLD_OFFSET = (-0.035, -0.02, 0.02)
 BASE_HOLD_ROTATION = axis_angle([0, 0, 1], 0.5 * math.pi)  # palm (-Y) turned to face +X
+# Where the left hand's reach starts (box frame, from the hold): to the left, above and towards the user, where a
+# hand rests beside the box. It travels open to the hold in the reach's time (durations: left_reach), as the right
+# hand reaches the lid.
+LEFT_REST = (-0.15, 0.12, 0.15)

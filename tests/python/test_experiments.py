@@ -171,7 +171,7 @@ def test_methods_and_thresholds_pick_the_conditions_run(capsys):
 
 def test_under_the_physical_push_the_left_hand_takes_the_base_and_does_not_knock_it():
     """Issue 20 item 6 under the physical push (docs/grasp.md "A resting body's support bears the press"): the
-    two-hand users' left hand is picked up with its fingers already in the base; the base rests on the table,
+    two-hand users' left hand closes its fingers into the base; the base rests on the table,
     whose support and friction hold it against the pulp, so the hand closes on it and eq. 3 grasps it. Before the
     support bore the press, the overlap was pushed out at once and 8 of the first 10 open users knocked the base."""
     for task in ("open", "close"):

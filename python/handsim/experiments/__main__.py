@@ -144,9 +144,9 @@ def report(rows, results, trials, check, seconds, command, where) -> str:
     L.append("- **close**: from 90°, *carry*: grip the top edge and swing it down to closed; *push*: a flat hand "
              "from behind tips the lid to 30° and lets it fall (push-only trials: any grasp of the lid is a false "
              "grasp).")
-    L.append("- **two hands**: the left hand holds the base first (it appears beside the base's left end, palm "
-             "towards it, and curls its fingers into it: eq. 3 grasps the base) and keeps holding it, with its "
-             "own glove errors, while the right hand works (the paper's Fig. 6).\n")
+    L.append("- **two hands**: the left hand holds the base first (it reaches open from beside the box to the "
+             "base's left end, palm towards it, and curls its fingers into it: eq. 3 grasps the base) and keeps "
+             "holding it, with its own glove errors, while the right hand works (the paper's Fig. 6).\n")
     L.append(f"**Success**: {SUCCESS}. **Completion time**: from the first touch of the box to the last time "
              "the lid entered the goal, successful trials only. **Drops**: trials where the lid's grasp ended "
              "while the user still meant to hold it. **False grasps**: push-only trials in which the lid got "
@@ -229,8 +229,8 @@ def report(rows, results, trials, check, seconds, command, where) -> str:
     L.append("## Limits of this reproduction\n")
     L.append("- Times are of scripted motions whose speeds are drawn; they reflect the user model as much as the "
              "simulation (retries, lost grasps and the closed loop make the difference between conditions).")
-    L.append("- The left hand's reach to the base is not simulated: the glove picks the hand up beside the base. "
-             "Left hands that slid in from the side or from above pushed the base or caught the lid first. "
+    L.append("- The left hand reaches the base open and closes its grip beside it, where the open hand touches "
+             "nothing (a hand that closed while still coming in carried the base it had grasped along). "
              "Trials in which the left hand grasped the base: " +
              ", ".join(f"{r['method']} c={r['threshold']:+.1f} {r['task']}: {r['base_held']}/{r['trials']}"
                        for r in rows if r["hands"] == 2) + ".")
