@@ -319,10 +319,11 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
   faces.clear();
   if (contacts.empty()) return;
   const Mat3 R = pose.orientation.normalized().toRotationMatrix();
-  // The palm's motion relative to the body, once per pair: the hand's velocity estimate is a least-squares
-  // slope over its history, too dear to evaluate per contact (hundreds on a pinched lid).
-  const BodyVelocity hand_at_body = hand.palm.attached_body_velocity(pose.position);
-  const Vec3 dv = hand_at_body.linear - body.linear, dw = hand_at_body.angular - body.angular;
+  // The palm's motion relative to the body, once per pair and only when a particle's motion is read with no
+  // bones' history: the hand's velocity estimate is a least-squares slope over its history, too dear to
+  // evaluate per contact (hundreds on a pinched lid).
+  Vec3 dv, dw;
+  bool palm_relative = false;
   auto prev = previous.begin();
   for (ParticleContact& c : contacts) {  // both lists are sorted by particle
     // The next face is most often the one (the full pass's contacts are most of the faces); further on it is
@@ -343,7 +344,15 @@ void keep_entry_faces(const Eigen::Matrix3Xd& centres, double radius, const Prep
     // came out of the 1.5 cm lid answered by the far face, where at 60 Hz it kept its entry face (docs/grasp.md "Why
     // a push depends on the frame rate").
     auto relative = [&] {
-      if (hand.bones == nullptr) return Vec3(dv + dw.cross(x - pose.position));
+      if (hand.bones == nullptr) {
+        if (!palm_relative) {
+          const BodyVelocity hand_at_body = hand.palm.attached_body_velocity(pose.position);
+          dv = hand_at_body.linear - body.linear;
+          dw = hand_at_body.angular - body.angular;
+          palm_relative = true;
+        }
+        return Vec3(dv + dw.cross(x - pose.position));
+      }
       return Vec3(hand.bones->point_velocity(*hand.model, c.particle, x, hand.span, hand.most) -
                   (body.linear + body.angular.cross(x - pose.position)));
     };

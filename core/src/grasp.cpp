@@ -438,22 +438,24 @@ void HandMotionHistory::push(const Pose& palm, double time) {
   samples_[static_cast<size_t>(next_)] = {p, time};
   next_ = (next_ + 1) % window();
   count_ = std::min(count_ + 1, window());
-  refresh_velocities();
+  stale_ = true;
 }
 
 // Least-squares slopes over the samples, with times taken relative to the newest sample so long sessions
 // (t ~ 1e5 s) keep sub-microsecond spacing: sum (tau_k - mean) x_k / sum (tau_k - mean)^2, x_k relative to the
 // newest. Linear: x_k the palm positions. Angular: the rotation vectors r_k = log(q_k q_newest^-1); under a
 // constant world-frame angular velocity, q_k = exp(w tau_k) q_newest, so r_k = w tau_k exactly and the slope is
-// w. One pass for both, once per push.
+// w. One pass for both, at the first read after a push.
 int HandMotionHistory::samples_in_span() const {
   return newest_in_span(count_, span_, [this](int age) { return sample(age).time; });
 }
 
-void HandMotionHistory::refresh_velocities() {
+const std::pair<Vec3, Vec3>& HandMotionHistory::slopes() const {
+  if (!stale_) return slopes_;
+  stale_ = false;
   if (!has_velocity()) {
-    linear_ = angular_ = Vec3::Zero();
-    return;
+    slopes_ = {Vec3::Zero(), Vec3::Zero()};
+    return slopes_;
   }
   const Sample& newest = sample(0);
   const Quat newest_inv = newest.pose.orientation.conjugate();
@@ -464,13 +466,13 @@ void HandMotionHistory::refresh_velocities() {
         linear += tau * (s.pose.position - newest.pose.position);
         angular += tau * rotation_vector(Quat(s.pose.orientation * newest_inv));
       });
-  linear_ = linear / spread;
-  angular_ = angular / spread;
+  slopes_ = {linear / spread, angular / spread};
+  return slopes_;
 }
 
 void HandMotionHistory::clear() {
   count_ = 0;
-  linear_ = angular_ = Vec3::Zero();
+  stale_ = true;
 }
 
 bool HandMotionHistory::in_time_order() const {

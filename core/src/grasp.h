@@ -303,10 +303,11 @@ class HandMotionHistory {
   bool has_velocity() const { return count_ >= 2; }  // below that, the velocities are zero
   double newest_time() const { return count_ > 0 ? sample(0).time : 0.0; }  // 0 when empty
 
-  // Both are slopes over the samples of the last `span` seconds, evaluated once per push (the step asks for them
-  // per pair and per held body).
-  Vec3 linear_velocity() const { return linear_; }    // of the palm position (m/s)
-  Vec3 angular_velocity() const { return angular_; }  // world frame (rad/s)
+  // Both are slopes over the samples of the last `span` seconds, evaluated at the first read after a push and
+  // kept until the next (the step asks for them per pair and per held body, and most pushes are never read: a
+  // body's path is read at a let-go only).
+  Vec3 linear_velocity() const { return slopes().first; }    // of the palm position (m/s)
+  Vec3 angular_velocity() const { return slopes().second; }  // world frame (rad/s)
   // Velocity of a point rigidly attached to the palm, at its current world position x: v + w x (x - palm),
   // with palm the latest palm position. This is what an object released from the hand should get.
   Vec3 point_velocity(const Vec3& world_point) const;
@@ -324,8 +325,8 @@ class HandMotionHistory {
     });
     v.index(h.next_, uint32_t(h.samples_.size()));
     v.index(h.count_, uint32_t(h.samples_.size() + 1));
-    // The velocities are a function of the samples: recomputed when a restore wrote them, never saved.
-    if constexpr (!std::is_const_v<Self>) h.refresh_velocities();
+    // The velocities are a function of the samples: made again when read after a restore wrote them, never saved.
+    if constexpr (!std::is_const_v<Self>) h.stale_ = true;
   }
 
  private:
@@ -334,14 +335,18 @@ class HandMotionHistory {
     double time = 0;
   };
   const Sample& sample(int age) const;  // 0 = newest
-  void refresh_velocities();  // linear_, angular_ from the samples of the span: both least-squares slopes
+  // linear_, angular_ from the samples of the span (both least-squares slopes), when the samples changed since.
+  const std::pair<Vec3, Vec3>& slopes() const;
   int samples_in_span() const;  // how many of the newest samples the slopes use
 
   std::vector<Sample> samples_;  // ring buffer
   double span_ = 0;              // s (0: every sample held)
   int next_ = 0;
   int count_ = 0;
-  Vec3 linear_ = Vec3::Zero(), angular_ = Vec3::Zero();  // the slopes of the samples now held
+  // The slopes of the samples now held, unless stale_ (a cache: the samples decide them; a World reads them
+  // under its lock).
+  mutable std::pair<Vec3, Vec3> slopes_{Vec3::Zero(), Vec3::Zero()};
+  mutable bool stale_ = false;
 };
 
 }  // namespace handsim
