@@ -12,6 +12,23 @@ namespace py = pybind11;
 
 namespace handsim {
 namespace {
+// A step's StepReport as the Python object World.step returns (report_object).
+struct StepReportObject {
+  py::object object;
+};
+}  // namespace
+}  // namespace handsim
+
+namespace pybind11::detail {
+// Returned as it is, typed as the StepReport it holds (the same signature and stub as returning a StepReport).
+template <> struct type_caster<handsim::StepReportObject> {
+  PYBIND11_TYPE_CASTER(handsim::StepReportObject, make_caster<handsim::StepReport>::name);
+  static handle cast(handsim::StepReportObject src, return_value_policy, handle) { return src.object.release(); }
+};
+}  // namespace pybind11::detail
+
+namespace handsim {
+namespace {
 
 using namespace py_convert;
 
@@ -216,6 +233,36 @@ Error renamed_by_key(const Error& e, const std::vector<HandInput>& inputs) {
   return Error(e.status(), key_name(inputs[k].hand) + rest, message);
 }
 
+// The report of a step as a Python object. Making one (an instance, a copy of the report on the heap, its entry
+// in pybind11's instance map) and freeing it when the caller drops it cost ~2k instructions of a ~40k held
+// frame (docs/performance.md "Session 18"). So two objects are kept, and one that nothing else refers to (its
+// only reference ours, no weak reference: nobody can see it again) is given the new report instead; else a
+// new one is made and kept in place of the older. A loop that drops each report, or keeps the last until the
+// next step returns, makes none after its first steps; a caller that keeps its reports gets a new one each
+// time, as before. Under the GIL, which every call here holds.
+StepReportObject report_object(const StepReport& report) {
+  struct Kept {
+    PyObject* object = nullptr;
+    StepReport* value = nullptr;
+  };
+  static Kept kept[2];     // never released: they live as long as the module
+  static size_t older = 0;  // the slot replaced when neither is free
+  for (Kept& k : kept) {
+    if (k.object == nullptr || Py_REFCNT(k.object) != 1) continue;
+    const Py_ssize_t weak = Py_TYPE(k.object)->tp_weaklistoffset;
+    if (weak > 0 && *reinterpret_cast<PyObject**>(reinterpret_cast<char*>(k.object) + weak) != nullptr) continue;
+    *k.value = report;
+    return {py::reinterpret_borrow<py::object>(k.object)};
+  }
+  py::object fresh = py::cast(report);
+  Kept& slot = kept[older];
+  older = 1 - older;
+  Py_XDECREF(slot.object);
+  slot.object = fresh.inc_ref().ptr();
+  slot.value = &fresh.cast<StepReport&>();
+  return {std::move(fresh)};
+}
+
 StepReport step_by_id(World& w, double dt, const py::dict& hands) {
   const std::vector<HandInput> inputs = to_inputs(hands);
   try {
@@ -271,11 +318,16 @@ void bind_world_class(py::module_& m) {
            "Set the linear (m/s) and angular (rad/s) velocity, both (3,) in the world frame.")
       .def("step",
            [](World& w, double dt, py::handle hands) {
-             if (hands.is_none()) return step_by_id(w, dt, py::dict());
-             if (py::isinstance<py::dict>(hands)) return step_by_id(w, dt, py::reinterpret_borrow<py::dict>(hands));
+             if (hands.is_none()) return report_object(step_by_id(w, dt, py::dict()));
+             if (py::isinstance<py::dict>(hands))
+               return report_object(step_by_id(w, dt, py::reinterpret_borrow<py::dict>(hands)));
              std::vector<HandFrame> frames = to_frames(hands);
-             py::gil_scoped_release release;
-             return w.step(dt, frames);
+             StepReport report;
+             {
+               py::gil_scoped_release release;
+               report = w.step(dt, frames);
+             }
+             return report_object(report);
            },
            py::arg("dt"), py::arg("hands") = py::none(),
            "Advance one frame of dt seconds. hands is {HandId: HandFrame}: each frame drives the hand its key\n"

@@ -60,3 +60,27 @@ def test_joint_solved_is_false_the_frame_after_the_hand_leaves():
     world.step(DT)
     state = world.joint_state(box.hinge)
     assert not state.solved and state.cost == 0 and state.iterations == 0 and state.solve_seconds == 0
+
+
+def test_a_kept_report_is_never_rewritten_by_a_later_step():
+    """World.step reuses a report object nothing else refers to (docs/performance.md "Session 18"); one a caller
+    keeps, directly, in a list or through a weak reference, keeps its own step's report."""
+    import weakref
+    world = handsim.World()
+    world.add_body(handsim.BodyDef(shape=handsim.Shape.box([0.05] * 3), pose=[0, 1, 0, 0, 0, 0, 1]))
+    first = world.step(1.0)  # substeps dropped: a report unlike the next ones
+    kept = [world.step(DT) for _ in range(3)]
+    assert len({id(r) for r in kept}) == 3
+    weak_target = world.step(0.5 / 240)  # below one substep: dynamics skipped
+    weak = weakref.ref(weak_target)
+    del weak_target
+    for _ in range(4):
+        world.step(DT)  # dropped at once: reusable
+    last = None
+    for _ in range(4):
+        last = world.step(DT)  # the previous one held by `last` while the step runs
+    assert first.has(handsim.StepWarning.SUBSTEPS_DROPPED) and first.substeps == 8
+    assert all(not r.has(handsim.StepWarning.SUBSTEPS_DROPPED) and r.substeps == 4 for r in kept)
+    if weak() is not None:
+        assert weak().stage(handsim.Stage.DYNAMICS).skip == handsim.SkipReason.BELOW_SUBSTEP
+    assert last.substeps == 4 and world.last_step().substeps == 4
