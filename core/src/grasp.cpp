@@ -687,9 +687,13 @@ void Grasps::begin_grasp(uint32_t hi, uint32_t bi) {
   if (!b.grasp.grasped) {
     b.grasp = {true, hand_id(hi), HandId{}, h.palm.inverse() * b.pose};
     moving.held.push_back(bi);
-    // A free body is attached to the hand. A joint's child is not: the hand only tells the joint where it
-    // wants the child (hard: solve_joints; soft: a velocity drive against the Bullet constraint).
-    if (!b.jointed() && b.soft_joint < 0) set_motion(backend, moving, b, BodyMotion::Kinematic);
+    // A free body is attached to the hand, and moves with it from this frame. A joint's child is not: the hand only
+    // tells the joint where it wants the child (hard: solve_joints; soft: a velocity drive against the Bullet
+    // constraint).
+    if (!b.jointed() && b.soft_joint < 0) {
+      set_motion(backend, moving, b, BodyMotion::Kinematic);
+      follow_hand(def, bodies, hands, boxes, stop_scratch, b);
+    }
   } else if (b.grasp.primary.index != hi && b.grasp.secondary.is_null()) {
     b.grasp.secondary = hand_id(hi);
     b.secondary_relative = h.palm.inverse() * b.pose;
@@ -710,23 +714,23 @@ void Grasps::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_v
     if (!b.grasp.secondary.is_null()) hand_over(b);
     else b.grasp = GraspInfo();
   } else {
-    // The attach stage has not run yet this frame: first put the body where its hand holds it now, so a
-    // released body starts from the hand's current pose (with the velocity of that point), and a body handed
-    // over starts from there too.
-    const HandSlot& h = hands[hi];
-    Vec3 pushed;
-    b.pose = held_pose(def, bodies, boxes, hands, stop_scratch, b, &pushed);
+    // A released body starts from where its hand holds it now, with the velocity of that point, and a body handed
+    // over starts from there too. In a step the attach stage put it there already, before the contacts (the same
+    // pose again); between steps it is where the last step's hand left it.
+    follow_hand(def, bodies, hands, boxes, stop_scratch, b);
     if (!b.grasp.secondary.is_null()) hand_over(b);
-    else release(b, zero_velocity ? BodyVelocity{} : stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed));
+    else release(b, zero_velocity ? BodyVelocity{} : BodyVelocity{b.linear, b.angular});
   }
   events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
 }
 
-// The secondary hand becomes primary, taking the body from where it is: no jump.
+// The secondary hand becomes primary, taking the body from where it is: no jump. A free body moves with it from
+// this frame.
 void Grasps::hand_over(Body& b) {
   b.grasp.primary = b.grasp.secondary;
   b.grasp.secondary = HandId{};
   b.grasp.primary_relative = hands[b.grasp.primary.index].palm.inverse() * b.pose;
+  if (!b.jointed() && b.soft_joint < 0) follow_hand(def, bodies, hands, boxes, stop_scratch, b);
 }
 
 void Grasps::release(Body& b, const BodyVelocity& velocity) {
@@ -753,6 +757,16 @@ void Grasps::end_pair(uint32_t hi, uint32_t bi, EventReason reason) {
     events.push_back({EventType::ContactEnd, hand_id(hi), body_id(bi)});
 }
 
+void follow_hand(const WorldDef& def, std::vector<Body>& bodies, const std::vector<HandSlot>& hands,
+                 const BodyBoxes& boxes, StaticStopScratch& scratch, Body& b) {
+  const HandSlot& h = hands[b.grasp.primary.index];
+  Vec3 pushed;
+  b.pose = held_pose(def, bodies, boxes, hands, scratch, b, &pushed);
+  const BodyVelocity v = stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed);
+  b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
+  b.angular = capped_speed(v.angular);
+}
+
 // --- lines 10, 14: a grasped object keeps its pose relative to its primary hand (stopped by static geometry:
 // static_stop.cpp) ---
 StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t>& held, std::vector<Body>& bodies,
@@ -761,12 +775,7 @@ StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t
   for (uint32_t bi : held) {
     Body& b = bodies[bi];
     if (b.jointed() || b.soft_joint >= 0) continue;
-    const HandSlot& h = hands[b.grasp.primary.index];
-    Vec3 pushed;
-    b.pose = held_pose(def, bodies, boxes, hands, scratch, b, &pushed);
-    const BodyVelocity v = stopped_velocity(h.history.attached_body_velocity(b.pose.position), pushed);
-    b.linear = capped_speed(v.linear);  // a body held far from a fast-turning palm: omega x r unbounded
-    b.angular = capped_speed(v.angular);
+    follow_hand(def, bodies, hands, boxes, scratch, b);
     ++following;
   }
   if (following == 0) return stage_skipped(SkipReason::NothingGrasped);

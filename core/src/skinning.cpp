@@ -364,14 +364,11 @@ bool teleported(const Pose& a, const Pose& b, double dt) {
 }
 }  // namespace
 
-// --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
-StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report,
-                       double dt) {
+// --- the frame's input: each hand's bones, palm and the histories they feed (before the held bodies follow their
+// hands and anything is skinned) ---
+void track_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report, double dt) {
   const WorldDef& def = particles.def;
-  const std::vector<Body>& bodies = particles.bodies;
   std::vector<HandSlot>& hands = particles.hands;
-  int tracked = 0, skinned = 0, in_reach = 0;
-  for (auto& entry : particles.pairs) entry.second.still = false;  // set below for the hands near a body
   for (uint32_t i = 0; i < hands.size(); ++i) {
     HandSlot& h = hands[i];
     if (!h.alive) continue;
@@ -384,34 +381,12 @@ StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, doubl
       h.articulation.clear();
       continue;
     }
-    // The frame was validated by validate_step: pose the bones, then skin the particles only when the hand's
-    // coarse bounds come near a body (the paper: always).
+    // The frame was validated by validate_step.
     compute_bone_transforms(*h.model, *frame, h.state.bones);
     h.state.tracked = true;
     h.state.displaced.clear();
     h.deformed_current = false;
     h.particles_current = false;
-    coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
-    if (def.paper_pipeline) {
-      particles.skin_particles(h);
-      ++skinned;
-    } else if (particles.near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
-      // The hold path: a pair whose hand holds its body as it held it at the anchor skins only its witness
-      // pair (skin_particles_in_reach leaves the body out).
-      bool still = false;
-      for (auto it = particles.pairs.lower_bound({i, 0}); it != particles.pairs.end() && it->first.first == i; ++it) {
-        HandBodyPair& pair = it->second;
-        pair.still = particles.hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
-                     particles.holds_still(h, bodies[it->first.second], pair);
-        still = still || pair.still;
-      }
-      in_reach += particles.skin_particles_in_reach(h);
-      if (still) particles.skin_witnesses(h);
-      ++skinned;
-    } else {
-      h.reach_groups.clear();  // far from every body: no contact is possible this frame
-      h.reach_groups_only = true;
-    }
     const Pose palm{frame->joints[kPalm].position, frame->joints[kPalm].orientation.normalized()};
     // A palm that moved faster than the speed cap since its last frame teleported (a tracker glitch, a
     // re-centred play space): its motion history says nothing about the new place, and what it holds arrives
@@ -429,6 +404,39 @@ StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, doubl
     if (keeps_articulation(def))
       h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);
     h.render_dirty = true;
+  }
+}
+
+// --- lines 1-2: deform the hand mesh (eq. 1, particles only) and update the particles ---
+StageReport pose_hands(HandParticles& particles) {
+  const WorldDef& def = particles.def;
+  const std::vector<Body>& bodies = particles.bodies;
+  std::vector<HandSlot>& hands = particles.hands;
+  int tracked = 0, in_reach = 0;
+  for (auto& entry : particles.pairs) entry.second.still = false;  // set below for the hands near a body
+  for (uint32_t i = 0; i < hands.size(); ++i) {
+    HandSlot& h = hands[i];
+    if (!h.alive || !h.state.tracked) continue;
+    // Skin the particles only when the hand's coarse bounds come near a body (the paper: always).
+    coarse_particle_bounds(h.reach, h.state.bones, h.state.bounds_lo, h.state.bounds_hi);
+    if (def.paper_pipeline) {
+      particles.skin_particles(h);
+    } else if (particles.near_any_body(h.state.bounds_lo, h.state.bounds_hi)) {
+      // The hold path: a pair whose hand holds its body as it held it at the anchor skins only its witness
+      // pair (skin_particles_in_reach leaves the body out).
+      bool still = false;
+      for (auto it = particles.pairs.lower_bound({i, 0}); it != particles.pairs.end() && it->first.first == i; ++it) {
+        HandBodyPair& pair = it->second;
+        pair.still = particles.hold_path && def.particle_contacts == WorldDef::ParticleContacts::ClosedForm &&
+                     particles.holds_still(h, bodies[it->first.second], pair);
+        still = still || pair.still;
+      }
+      in_reach += particles.skin_particles_in_reach(h);
+      if (still) particles.skin_witnesses(h);
+    } else {
+      h.reach_groups.clear();  // far from every body: no contact is possible this frame
+      h.reach_groups_only = true;
+    }
     if (def.paper_pipeline) particles.skin_render_mesh(h);  // the paper skins the whole mesh every frame, needed or not
     ++tracked;
   }

@@ -391,7 +391,7 @@ struct Grasps {
   HandBodyPairs& pairs;
   BulletBackend& backend;
   MovingBodies& moving;
-  StaticStopScratch& stop_scratch;  // held_pose's, in end_grasp
+  StaticStopScratch& stop_scratch;  // held_pose's, in follow_hand
   std::vector<Event>& events;
 
   BodyId body_id(uint32_t index) const { return slot_id<BodyId>(bodies, index); }
@@ -444,7 +444,7 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   HandParticles particles() { return {def, bodies, *this, hands, pairs, particle_scratch, hold_path}; }
 
   // The grasp bookkeeping (Grasps above).
-  StaticStopScratch stop_scratch;  // held_pose's, in follow_primary_hands and end_grasp
+  StaticStopScratch stop_scratch;  // held_pose's, in follow_hand
   Grasps grasps() { return {def, bodies, hands, *this, pairs, *backend, *this, stop_scratch, events}; }
 
   // Algorithm 1 (world_step.cpp): its stages are free functions (below World::Impl), each defined in the file
@@ -584,21 +584,28 @@ bool may_meet_static(const WorldDef& def, const std::vector<Body>& bodies, const
 void support_contacts(const WorldDef& def, const std::vector<Body>& bodies, const BodyBoxes& boxes,
                       StaticStopScratch& scratch, const Body& b, std::vector<SkinContact>& out);
 
-// Grasps (grasp.cpp). Lines 10, 14: each held free body (`held`: held_bodies()) goes where its primary hand holds
-// it (held_pose), with that point's velocity; joint children are left to their joint.
+// Grasps (grasp.cpp). Lines 10, 14, run before the contacts: each held free body (`held`: held_bodies()) goes where
+// its primary hand holds it this frame (follow_hand), so the hand's contacts see the body where the hand carries it
+// (docs/grasp.md "The hold path"); joint children are left to their joint. A body grasped or handed over later in
+// the step follows its new hand there (Grasps::begin_grasp, hand_over).
 StageReport follow_primary_hands(const WorldDef& def, const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                                  const std::vector<HandSlot>& hands, const BodyBoxes& boxes, StaticStopScratch& scratch);
+// A held free body where its primary hand holds it now (held_pose: palm * T_rel, stopped by static geometry), with
+// that point's velocity.
+void follow_hand(const WorldDef& def, std::vector<Body>& bodies, const std::vector<HandSlot>& hands,
+                 const BodyBoxes& boxes, StaticStopScratch& scratch, Body& b);
 // Line 20 (eq. 5): each held body (`held`, held_bodies()) that a second hand holds re-takes
 // its pose in that hand's palm frame, so the secondary hand slips along the body instead of dragging it.
 StageReport retake_secondary_hands(const std::vector<uint32_t>& held, std::vector<Body>& bodies,
                                    const std::vector<HandSlot>& hands);
 
-// Lines 1-2 (skinning.cpp): each tracked hand's bones from its frame (`frames`, indexed like the hands; null:
-// untracked), its particles skinned (eq. 1) where they can touch a body (the paper: all), the still held pairs
-// marked for the hold path, and the palm histories pushed at the frame's end time (`time` + dt). A palm that moved
-// faster than the speed cap raises HandTeleported in `report`.
-StageReport pose_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report,
-                       double dt);
+// The frame's input (skinning.cpp): each tracked hand's bones and palm from its frame (`frames`, indexed like the
+// hands; null: untracked) and the histories they feed, pushed at the frame's end time (`time` + dt). A palm that
+// moved faster than the speed cap raises HandTeleported in `report`.
+void track_hands(HandParticles& particles, const SlotFrames& frames, double time, StepReport& report, double dt);
+// Lines 1-2 (skinning.cpp): each tracked hand's particles skinned (eq. 1) from its bones where they can touch a body
+// (the paper: all), and the still held pairs marked for the hold path.
+StageReport pose_hands(HandParticles& particles);
 // Line 3 (contacts.cpp): each tracked hand's particles against the bodies near it, into the pairs (a pair made for
 // a first contact; a held body's contacts within release_distance), with their entry faces; a still held pair
 // takes the witness pass (the hold path) and becomes lazy. The paper's narrow phase (BulletObjects) rebuilds a

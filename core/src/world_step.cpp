@@ -24,7 +24,6 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   w.report = StepReport();
   for (Joint& j : w.joints) j.clear_solve();  // JointState's solve fields are this step's only
   const uint64_t nonfinite_before = w.nonfinite_recoveries;
-  w.refresh_moving_boxes();
   HandParticles particles = w.particles();
   Grasps grasps = w.grasps();
   auto stage = [&w](Stage s, auto&& run) {
@@ -34,13 +33,20 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
     r.stage = s;
     w.report.stages[size_t(s)] = r;
   };
-  stage(Stage::Skinning, [&] { return pose_hands(particles, frames, w.time, w.report, dt); });  // lines 1-2: eq. 1
+  track_hands(particles, frames, w.time, w.report, dt);  // the frame's bones, palms and their histories
+  // Lines 10, 14, before the contacts: a held body moves with its hand, and a grip is relative, so the hand of this
+  // frame is judged against the body where this frame's hand carries it (docs/grasp.md "The hold path"). A body
+  // grasped in this frame's grasp stage follows its hand there. Then the boxes of what the last step's joints and
+  // this carry moved, for the hand-body broadphase.
+  stage(Stage::Attach, [&] {
+    const StageReport r = follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
+    w.refresh_moving_boxes();
+    return r;
+  });
+  stage(Stage::Skinning, [&] { return pose_hands(particles); });           // lines 1-2: eq. 1
   stage(Stage::Contacts, [&] { return detect_contacts(particles, w.body_version, dt); });  // line 3
   stage(Stage::Deformation, [&] { return deform_hands(particles); });      // particles pushed back to the surface
   stage(Stage::Grasp, [&] { return decide_grasps(grasps, w.grasp_scratch, dt); });  // lines 4-9, 11-13, 16: eq. 3
-  stage(Stage::Attach, [&] {                                                // lines 10, 14
-    return follow_primary_hands(w.def, w.held_bodies(), w.bodies, w.hands, w, w.stop_scratch);
-  });
   stage(Stage::PoseFit, [&] {                                               // line 17: eq. 2
     return fit_touched_bodies(w, w.bodies, w.joints, w.hands, w.pairs, w.held_bodies(), w.released, *w.backend, w,
                               w.pose_fit_scratch, dt);

@@ -33,11 +33,12 @@ def test_the_cube_carry_pinch_grasps_under_wrap():
 
 
 def test_contact_changes():
-    # The still hold's contacts change depth by rounding only; the eased carry's all change (docs/performance.md)
+    # The still hold's contacts change depth by rounding only, and so do the eased carry's since the held cube
+    # follows its hand before the contacts (docs/performance.md, docs/grasp.md "The hold path")
     doc = peers.contact_changes()
     lid, = doc["scenes"]["lid_drag"]
     assert lid["pairs"] == peers.FRAMES - 1 and lid["touching_median"] > 0
     assert lid["largest_change_median_m"] < 1e-12
     for r in doc["scenes"]["cube_carry"]:
-        assert r["all_changed_frames"] == r["pairs"] and r["largest_change_median_m"] > 1e-6
+        assert r["pairs"] == peers.FRAMES - 1 and r["touching_min"] >= 2 and r["largest_change_max_m"] < 1e-12
     assert "cube_carry" in peers.contact_changes_table(doc)

@@ -996,9 +996,14 @@ BOUNDED = {"confidence-demo": 240, "confidence-demo-half-res": 240, "confidence-
 # the default push (docs/grasp.md "Wrap as the default, measured"), confidence2 and grab meet every expectation
 # (under the fit: confidence2 "no grasp by an open hand", grab "as it closes" and "no grasp by an open hand" not
 # met), and confidence2-49fps' closing left hand grasps the cube as it closes (step 51, strength 1.00) but grasps it
-# again while open (step 109, strength 0.00): one expectation missed where the fit missed two.
+# again while open (step 109, strength 0.00): one expectation missed where the fit missed two. Since a held body
+# follows its hand before the contacts (docs/grasp.md "The hold path", session 18), the release at step 58 takes its
+# contacts, and the entry faces the let-go carries on, against the cube where the hand carried it; the let-go cube
+# rests about 1 mm elsewhere (step 60: (-34.6, 921.9, -289.2) mm against (-35.7, 922.4, -288.5)), and the open
+# left hand that closed onto it at step 109 no longer does: every expectation met. Not a rule for open hands: a mm
+# of difference in where the cube lies decided it.
 # Strict: the entry must go when the rule meets the expectation again.
-OPEN_HAND_GRASPS = {"confidence2-49fps": {"no grasp by an open hand"}}
+OPEN_HAND_GRASPS = {}
 
 
 @pytest.mark.parametrize("name", recording_names())
