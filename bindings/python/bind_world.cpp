@@ -196,23 +196,23 @@ std::vector<HandFrame> to_frames(py::handle hands) {
 // "hands[HandId(index=0, generation=1)]: expected a HandFrame, got int".
 std::string key_name(HandId id) { return "hands[" + id_repr("HandId", id.index, id.generation) + "]"; }
 
-std::vector<HandInput> to_inputs(const py::dict& hands) {
-  std::vector<HandInput> inputs;
-  inputs.reserve(hands.size());
-  // One type lookup per key and per frame (a caster's load without conversions is the isinstance test, and
-  // keeps the value), and the key's name only for a message: per entry of every step, an isinstance then a cast
-  // looked each type up twice, and building the name cost more than both.
-  py::detail::make_caster<HandId> key_caster;
-  py::detail::make_caster<HandFrame> frame_caster;
+// Fills `inputs` (the caller's, kept from step to step so a step allocates none) from the dict.
+void to_inputs(const py::dict& hands, std::vector<HandInput>& inputs) {
+  inputs.clear();
+  // The two types looked up once for the module, a caster's load without conversions as the isinstance test
+  // (it keeps the value), and the key's name only for a message: per entry of every step, an isinstance then a
+  // cast looked each type up twice, and building the name cost more than both.
+  static const py::detail::type_info* const id_type = py::detail::get_type_info(typeid(HandId));
+  static const py::detail::type_info* const frame_type = py::detail::get_type_info(typeid(HandFrame));
+  py::detail::type_caster_generic key_caster(id_type), frame_caster(frame_type);
   for (auto [key, frame] : hands) {
     if (!key_caster.load(key, false))
       throw py::type_error("hands: key " + std::string(py::repr(key)) + " (" +
                            std::string(py::str(py::type::of(key).attr("__name__"))) + ") is not a HandId");
-    const HandId id = py::detail::cast_op<const HandId&>(key_caster);
-    inputs.push_back({id, frame_caster.load(frame, false) ? py::detail::cast_op<const HandFrame&>(frame_caster)
+    const HandId id = *static_cast<const HandId*>(key_caster.value);
+    inputs.push_back({id, frame_caster.load(frame, false) ? *static_cast<const HandFrame*>(frame_caster.value)
                                                           : cast_arg<HandFrame>(frame, key_name(id))});
   }
-  return inputs;
 }
 
 // The core names an entry by its position, "hands[k].hand" or "hands[k].frame.<field>"; a dict has no
@@ -264,7 +264,10 @@ StepReportObject report_object(const StepReport& report) {
 }
 
 StepReport step_by_id(World& w, double dt, const py::dict& hands) {
-  const std::vector<HandInput> inputs = to_inputs(hands);
+  // This thread's, reused: a step never calls back into Python, so no other step of this thread uses it
+  // meanwhile.
+  thread_local std::vector<HandInput> inputs;
+  to_inputs(hands, inputs);
   try {
     py::gil_scoped_release release;
     return w.step(dt, inputs);

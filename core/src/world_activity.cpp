@@ -92,8 +92,10 @@ void World::Impl::forget_body_paths() {
 // (read_dynamic_bodies), bodies the API moves in set_body_pose / add_body.
 void World::Impl::refresh_moving_boxes() {
   if (body_boxes.size() < 6 * bodies.size()) body_boxes.resize(6 * bodies.size());
-  for (uint32_t bi : held_bodies()) update_box(bodies, bi);
-  for (uint32_t k : joint_order) update_box(bodies, joints[k].child);
+  const std::vector<uint32_t>& moved = held_bodies();  // sorted
+  for (uint32_t bi : moved) update_box(bodies, bi);
+  for (uint32_t k : joint_order)  // a held child's box was just made from the same pose
+    if (!std::binary_search(moved.begin(), moved.end(), joints[k].child)) update_box(bodies, joints[k].child);
 }
 
 // The broadphase: the live bodies whose box overlaps [lo, hi] grown by `margin`, in slot order (out), or
