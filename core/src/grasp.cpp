@@ -665,7 +665,7 @@ StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt) {
           pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
       if (e.type == GraspEventType::GraspEnd) {
         grasps.end_grasp(hi, bi, e.reason == ReleaseReason::TrackingLost ? EventReason::TrackingLost : EventReason::Released,
-                  e.zero_velocity);
+                  e.zero_velocity, count > 0);
         pair.let_go = def.push_model == PushModel::Wrap;  // its overlap now is the grip's (HandBodyPair::let_go)
       }
       // A hand whose grasp found both places taken (a third hand) joins as soon as one frees up.
@@ -703,14 +703,24 @@ void Grasps::begin_grasp(uint32_t hi, uint32_t bi) {
   events.push_back({EventType::GraspBegin, hand_id(hi), body_id(bi)});
 }
 
-void Grasps::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity) {
+void Grasps::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_velocity, bool touching) {
   Body& b = bodies[bi];
   if (!b.held_by(hi)) return;
   if (b.grasp.primary.index != hi) {
     b.grasp.secondary = HandId{};
+  } else if (b.jointed() && b.grasp.secondary.is_null() && !zero_velocity && touching) {
+    // A hard joint's child let go of: the grasp's end is seen at the end of this frame, through which the hand held
+    // the grip, so the joint solve still carries the child to where its hand holds it now, and it leaves from there
+    // with its hand's motion (solve_joints; free after it: finish_releases), as a released free body starts from its
+    // hand's pose now (below). Freed where the last held frame left it, the child lagged its hand by one frame's
+    // motion, so which frame happened to see the grip open decided how far it went (docs/grasp.md "Under Wrap"). Only
+    // a hand still touching it held it through the frame: one whose contacts vanished (a tracker jump carrying the
+    // hand away) did not.
+    moving.letting_go.push_back(bi);
   } else if (b.jointed() || b.soft_joint >= 0) {
-    // A joint's child is never teleported to the hand: the other hand takes over where the child is, or
-    // the joint keeps the velocity the hand gave it.
+    // A joint's child is never teleported to the hand: the other hand takes over where the child is, or the joint
+    // keeps the velocity the hand gave it (a soft joint's drive; a hand whose tracking or contacts are lost held
+    // nothing through this frame).
     if (!b.grasp.secondary.is_null()) hand_over(b);
     else b.grasp = GraspInfo();
   } else {
@@ -722,6 +732,18 @@ void Grasps::end_grasp(uint32_t hi, uint32_t bi, EventReason reason, bool zero_v
     else release(b, zero_velocity ? BodyVelocity{} : BodyVelocity{b.linear, b.angular});
   }
   events.push_back({EventType::GraspEnd, hand_id(hi), body_id(bi), reason});
+}
+
+// The children let go of this step (end_grasp), carried to their hand's pose by the joint solve, are free from here;
+// one that a second hand grasped in the same step is that hand's.
+void Grasps::finish_releases() {
+  for (uint32_t bi : moving.letting_go) {
+    Body& b = bodies[bi];
+    if (!b.grasp.grasped) continue;
+    if (!b.grasp.secondary.is_null()) hand_over(b);
+    else b.grasp = GraspInfo();
+  }
+  moving.letting_go.clear();
 }
 
 // The secondary hand becomes primary, taking the body from where it is: no jump. A free body moves with it from

@@ -146,6 +146,13 @@ Vec3 rotation_vector(const Quat& q_in) {
 
 Vec3 rotation_vector(const Mat3& R) { return rotation_vector(Quat(R)); }
 
+// `pose` moved for `t` seconds at a constant velocity (linear of its origin, angular about it).
+Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double t) {
+  const double turn = angular.norm() * t;
+  const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
+  return {pose.position + linear * t, (spin * pose.orientation).normalized()};
+}
+
 BodyVelocity velocity_from_motion(const RigidMotion& motion, const Vec3& centre_of_mass, double dt) {
   validate::time_step(dt);
   validate::finite(centre_of_mass, "centre_of_mass");
@@ -246,13 +253,6 @@ InverseInertia inverse_inertia(const Body& b) {
   return inv;
 }
 
-// `pose` moved for `t` seconds at a constant velocity (linear of its origin, angular about it).
-Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double t) {
-  const double turn = angular.norm() * t;
-  const Quat spin = turn > 0 ? Quat(Eigen::AngleAxisd(turn, angular.normalized())) : Quat::Identity();
-  return {pose.position + linear * t, (spin * pose.orientation).normalized()};
-}
-
 // The Coulomb coefficient of the finger pulp along a body's surface (PushModel::Physical). Measured dry finger-pad
 // friction against smooth materials (glass, metals, plastics) lies at about 0.5 to 1 and rises with sweat
 // (reviewed by Derler & Gerhardt, Tribology Letters 45, 2012); 0.5, the dry end, because a hand's grazing
@@ -312,14 +312,25 @@ double moved_into(const WorldDef& def, const HandSlot& hand, const Body& b, cons
 // by the arm and presses as before (docs/grasp.md "A closing digit does not displace a free body").
 bool forms_grip(const HandSlot& hand, const ParticleContact& c) { return rigid_part(*hand.model, c.particle) != kPalm; }
 
+// A velocity the press leaves that is zero but for its rounding (m/s): 1e-9 m/s moves a body 1.7e-11 m in a 60 Hz
+// frame, and the velocity solve of a lid lying still on still fingers leaves some 1e-19 m/s either way.
+constexpr double kAtRest = 1e-9;
+
 // A touched body gets the velocity eq. 2 or the skin gave it for this frame, from the pose `from` (b.pose, or where
-// the physical push's displacement put it: moved_out).
+// the physical push's displacement put it: moved_out). `from_below`: one of the pressing contacts pushes against
+// gravity (its surface faces down).
 void push_touched_body(const WorldDef& def, std::vector<Body>& bodies, std::vector<Joint>& joints, BulletBackend& backend,
-                       Body& b, const Pose& from, const Vec3& linear, const Vec3& angular, double dt) {
+                       Body& b, const Pose& from, const Vec3& linear, const Vec3& angular, double dt,
+                       bool from_below = false) {
   if (b.jointed()) {
     Joint& j = joints[b.hard_joint];
-    // The joint integrates gravity itself; a push against it carries the child's weight for the frame.
-    b.supported = linear.dot(def.gravity) < 0;
+    // The joint integrates gravity itself; a push against it carries the child's weight for the frame, and so does
+    // a press from below that leaves the child at rest (a lid lying still on still fingers). Taken on the sign of
+    // its velocity alone, that rest was decided by rounding: a lid let go of onto a still thumb was borne at 120 Hz
+    // (+7.6e-20 m/s up) and at 30 Hz fell a frame's gravity into it (-7.4e-19), rocked and slipped off the lip
+    // (docs/grasp.md "Under Wrap", frame rates).
+    const double down = linear.dot(def.gravity);  // its speed along gravity times g
+    b.supported = down < 0 || (from_below && std::abs(down) <= kAtRest * def.gravity.norm());
     // The push moves the child only along its joint: the frame's motion projected by the micro-simulator.
     project_push(def, bodies, j, advanced(from, linear, angular, dt), dt);
     return;
@@ -449,7 +460,9 @@ void physical_push(const WorldDef& def, std::vector<Body>& bodies, std::vector<J
     v.linear -= carried.linear;
     v.angular -= carried.angular;
   }
-  push_touched_body(def, bodies, joints, backend, b, from, v.linear, v.angular, dt);
+  const bool from_below = std::any_of(pressed.begin(), pressed.end(),
+                                      [&](const SkinContact& c) { return c.normal.dot(def.gravity) > 0; });
+  push_touched_body(def, bodies, joints, backend, b, from, v.linear, v.angular, dt, from_below);
 }
 
 }  // namespace

@@ -66,6 +66,9 @@ Pose apply_motion(const RigidMotion& motion, const Pose& pose);
 Vec3 rotation_vector(const Quat& q);
 Vec3 rotation_vector(const Mat3& R);
 
+// `pose` moved for `t` seconds at a constant velocity (linear of its origin, angular about it).
+Pose advanced(const Pose& pose, const Vec3& linear, const Vec3& angular, double t);
+
 // The constant velocity that performs `motion` in `dt` seconds: angular = rotation_vector(R) / dt,
 // linear = displacement of `centre_of_mass` / dt. Used so an object keeps moving once the hand leaves it.
 // Throws handsim::Error when dt is not finite and > 0.

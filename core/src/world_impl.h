@@ -345,6 +345,7 @@ void near_particle_ranges(const HandSlot& h, double reach, const Vec3& body_lo, 
 struct MovingBodies {
   std::vector<uint32_t> held;      // grasped bodies; may keep entries no longer grasped (held_bodies filters)
   std::vector<uint32_t> released;  // bodies whose just_released is set
+  std::vector<uint32_t> letting_go;  // hard joints' children let go of in this step, held to its end (end_grasp)
   std::vector<uint32_t> dynamic;   // live dynamic bodies, rebuilt when motion_version moves on
   // Bodies whose path holds samples (BodyState::path): those of a hand-body pair at the last step's end
   // (record_body_paths), in slot order. May name a removed body (its path was reset when the slot was filled).
@@ -397,8 +398,10 @@ struct Grasps {
   BodyId body_id(uint32_t index) const { return slot_id<BodyId>(bodies, index); }
   HandId hand_id(uint32_t index) const { return slot_id<HandId>(hands, index); }
   void begin_grasp(uint32_t hand, uint32_t body);
-  void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity);
+  // `touching`: the hand still touches the body in this frame (a hard joint's child is carried through it).
+  void end_grasp(uint32_t hand, uint32_t body, EventReason reason, bool zero_velocity, bool touching = false);
   void hand_over(Body& b);
+  void finish_releases();  // after the joint solve: the children let go of this step are free (letting_go)
   void release(Body& b, const BodyVelocity& velocity);
   void retake_relative_poses(Body& b);
   // Ends what a (hand, body) pair has going on before one of them is removed: GraspEnd with `reason` when
@@ -533,9 +536,12 @@ void drive_soft_children(const std::vector<uint32_t>& held, std::vector<Body>& b
 // physical push's displacement out of the overlap (PushModel::Physical).
 void solve_grasped(const WorldDef& def, const std::vector<Body>& bodies, Joint& j, const Pose& simulated, double dt);
 // Line 19 (eq. 4): a grasped hard child takes the coordinate nearest where its primary hand holds it, then
-// every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved.
+// every hard child is placed; soft joints read their coordinate back from the bodies Bullet moved. A child let go of
+// in this step (`letting_go`, still grasped until Grasps::finish_releases) is carried there too, and leaves with its
+// hand's motion (leave_with_hand).
 StageReport solve_joints(const WorldModel& model, std::vector<Joint>& joints, std::vector<Body>& bodies,
-                         const std::vector<HandSlot>& hands, BulletBackend& backend, double dt);
+                         const std::vector<HandSlot>& hands, BulletBackend& backend,
+                         const std::vector<uint32_t>& letting_go, double dt);
 
 // What moves (world_activity.cpp), for the dynamics stage. Whether this frame's substeps must run Bullet, and
 // after a Bullet substep, the dynamic bodies (`dynamic`: dynamic_bodies()) read back with their boxes.

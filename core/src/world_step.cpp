@@ -54,7 +54,10 @@ StepReport World::Impl::step(double dt, const SlotFrames& frames) {
   stage(Stage::Dynamics, [&] {                                              // line 18
     return simulate(w, w, w.bodies, w.joints, w.hands, *w.backend, w.held_bodies(), w.dynamic_bodies(), w, w.report, dt);
   });
-  stage(Stage::Joints, [&] { return solve_joints(w, w.joints, w.bodies, w.hands, *w.backend, dt); });  // line 19: eq. 4
+  stage(Stage::Joints, [&] {                                                // line 19: eq. 4
+    return solve_joints(w, w.joints, w.bodies, w.hands, *w.backend, w.letting_go, dt);
+  });
+  grasps.finish_releases();  // the children let go of this step were carried to the frame's end: free from here
   stage(Stage::Slip, [&] { return retake_secondary_hands(w.held_bodies(), w.bodies, w.hands); });  // line 20: eq. 5
   w.report.nonfinite_bodies = int(w.nonfinite_recoveries - nonfinite_before);
   if (w.report.nonfinite_bodies > 0) w.report.warnings |= warning_bit(StepWarning::NonFiniteRecovered);
