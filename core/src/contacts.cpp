@@ -608,7 +608,13 @@ StageReport detect_contacts(HandParticles& particles, uint64_t body_version, dou
       auto key = std::make_pair(hi, bi);
       auto it = pairs.find(key);
       if (found.empty() && it == pairs.end()) continue;
-      if (it == pairs.end()) it = pairs.emplace(key, HandBodyPair(def.grasp)).first;
+      if (it == pairs.end()) {
+        it = pairs.emplace(key, HandBodyPair(def.grasp)).first;
+        // A first touch in the hand's first tracked frame with a centre already inside (HandBodyPair::appeared_inside).
+        it->second.appeared_inside =
+            def.grasp.closing_distance > 0 && !h.history.has_velocity() &&
+            std::any_of(found.begin(), found.end(), [&](const ParticleContact& c) { return c.depth > radius; });
+      }
       keep_entry_faces(h.state.tracked_positions, radius, b.prepared, b.pose, {b.linear, b.angular}, motion_of(def, h), dt, it->second.previous_faces,
                        it->second.entry_faces, found);
       it->second.contacts.swap(found);

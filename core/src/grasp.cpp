@@ -655,12 +655,14 @@ StageReport decide_grasps(Grasps& grasps, GraspScratch& scratch, double dt) {
       if (!own.opposing && closing_needed(def) > 0)
         for (const auto& [other, other_pair] : pairs)
           if (other.second == bi && other.first != hi && !other_pair.contacts.empty() && !other_pair.opposing_alone &&
+              !other_pair.appeared_inside &&
               hands[other.first].state.tracked && h.grip.palms_apart(hands[other.first].grip) > hand_length(*h.model) &&
               hands_oppose(def, pair, other_pair, directions, parts)) {
             intent.opposing = true;
             intent.closing = own.closing || h.grip.approached_by(hands[other.first].grip) >= closing_needed(def);
             if (intent.closing) break;
           }
+      if (pair.appeared_inside) intent.closing = false;  // never seen closing onto it (HandBodyPair::appeared_inside)
       const GraspEvent e =
           pair.tracker.update({intent.opposing, count, h.state.tracked, dt, intent.closing, h.grip.span()});
       if (e.type == GraspEventType::GraspEnd) {

@@ -146,13 +146,16 @@ Pose JewelryBox::lid_pinch_palm(const World& world, Handedness handedness, doubl
   validate::in_range(lift, -validate::kMaxCoordinate, validate::kMaxCoordinate, "lift", "m");
   if (handedness != Handedness::Left && handedness != Handedness::Right)
     validate::fail("handedness", "must be Left or Right");
-  // Measured on make_hand_frame(lid_pinch_shape()): with the palm 6 mm above the lid top and 6.2 cm in front
+  // Measured on make_hand_frame(lid_pinch_shape()): with the palm 1 cm above the lid top and 6.2 cm in front
   // of the lip, the index tip rests 5 cm in on the lid and the thumb tip sits under the lip, 2.4 cm to the
-  // thumb side of the palm centre: the hand is shifted that way to centre the pinch on the lid.
+  // thumb side of the palm centre: the hand is shifted that way to centre the pinch on the lid. 1 cm: the open
+  // hand lies on the lid with its skin at most 3.4 mm into it, the pulp's give, no particle's centre inside; at 6 mm
+  // (the height before) its palm sank 7 mm in, 86 centres inside, a hand that appears inside the lid
+  // (HandBodyPair::appeared_inside; a /tmp script stepping the open hand once at 0-6 mm of lift).
   const Pose b = world.body_pose(base);
   const Vec3& e = def.base_half_extents;
   const double side = handedness == Handedness::Right ? 1.0 : -1.0;
-  const Vec3 local(0.024 * side, e.y() + 2 * def.lid_half_thickness + 0.006 + lift,
+  const Vec3 local(0.024 * side, e.y() + 2 * def.lid_half_thickness + 0.010 + lift,
                    e.z() + def.lid_overhang + 0.062);
   const Pose closed{b.transform(local), b.orientation};
   const Vec3 pivot = hinge_pivot(world);

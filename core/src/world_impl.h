@@ -206,6 +206,13 @@ struct HandBodyPair {
   // then is the grip's, left by the hold or the closing, not a push: fit_touched_bodies moves the body out of it only
   // as far as the hand moves into it (docs/grasp.md "Under Wrap": the let-go; "The jump when wrapping ends").
   bool let_go = false;
+  // The intent rule (GraspSettings::closing_distance > 0): the hand appeared with a particle's centre inside this body
+  // (the pair began in the hand's first tracked frame: tracking began or came back, or the hand teleported) and has
+  // touched the body in every step since (the pair ends with its contacts). It begins no grasp of the body, alone or
+  // with another hand, until the two come apart: the tracker never showed the hand reaching the body and closing
+  // onto its surface, so where it entered (the penetration directions eq. 3 opposes) was not seen, and what it does
+  // inside is not a grip forming (docs/grasp.md "The appeared rule, landed").
+  bool appeared_inside = false;
   // While grasped: the particles of the opposing pair found last (hand_intent tries them first), or -1. The
   // hold path (docs/grasp.md "The hold path") collides only these two while the hand holds the body still.
   std::array<int, 2> witness{-1, -1};

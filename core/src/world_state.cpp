@@ -361,6 +361,7 @@ template <class W, class B, class V> void visit_world(W& w, B& backend, V& v) {
     v.list(pair.anchor, [&](auto& bone) { v.state(bone); });  // the hold path runs while the hand is still there
     v.state(pair.anchor_pose);
     if (w.def.push_model == PushModel::Wrap) v.state(pair.let_go);  // only Wrap sets it: others save as before
+    if (w.def.grasp.closing_distance > 0) v.state(pair.appeared_inside);  // only the intent rule sets it
   });
   // Bullet: its copy of every body (in Bullet's numbers) and its sleep.
   for (uint32_t h = 0; h < backend.bodies.size(); ++h) {

@@ -532,8 +532,8 @@ TEST(FirstTouch, WrapRelaxedGripDoesNotThrowAFreeBody) {
   box.mass = 0.5;
   box.pose.position = Vec3(0, 0.2, 0);
   const BodyId body = world.add_body(box);
-  // Palm 1.5 cm outside the box's -x face, 2 cm below its middle and 2 cm towards +z, facing +x (users.py BASE_HOLD_*).
-  const Pose palm{box.pose.position + Vec3(-0.015 - half.x(), -0.02, 0.02),
+  // Palm 3.5 cm outside the box's -x face, 2 cm below its middle and 2 cm towards +z, facing +x (users.py BASE_HOLD_*).
+  const Pose palm{box.pose.position + Vec3(-0.035 - half.x(), -0.02, 0.02),
                   Quat(Eigen::AngleAxisd(0.5 * M_PI, Vec3::UnitZ()))};
   HandPoseParams hold;
   hold.curl = {0.18, 0.6, 0.6, 0.6, 0.6};

@@ -694,6 +694,10 @@ TEST(JointsWorld, PushedLidOnAMovingBaseTurnsOnlyByItsHinge) {
 // whether that press bore it was the sign of a rounding (-7.4e-19 m/s at 30 Hz: it fell and shut); a press from below
 // leaving it at rest bears it now: 25.00 / 25.00 deg (23.51 / 25.44 before both).
 // docs/grasp.md "Under Wrap" (frame rates), confidence2.
+// The let-go tests below were measured with the pinch where lid_pinch_palm put it before its palm was raised 4 mm off
+// the lid (kPinchLift), and reach it from above in kReachS.
+constexpr double kPinchLift = -0.004, kReachS = 0.15;
+
 TEST(JointsWorld, LidLetGoRightAfterATrackerJumpRestsAlikeAtEveryFrameRate) {
   std::vector<double> rest;
   double bound = 0;
@@ -709,11 +713,17 @@ TEST(JointsWorld, LidLetGoRightAfterATrackerJumpRestsAlikeAtEveryFrameRate) {
     HandPoseParams grip = lid_pinch_shape();
     grip.curl[2] = grip.curl[3] = grip.curl[4] = 0.6;  // the fingers off the lid curled: the grasp ends as they open
     bool grasped = false, released = false;
+    // The hand comes down open onto the lid from 3 cm above in kReachS (a hand that appeared on it would not be seen
+    // reaching it: HandBodyPair::appeared_inside), to its pinch 4 mm below lid_pinch_palm's (where this was measured).
+    for (int k = 0; k * dt < kReachS - 1e-9; ++k)
+      world.step(dt, {{hand, make_hand_frame(Handedness::Right,
+                                             box.lid_pinch_palm(world, Handedness::Right, 0, kPinchLift + 0.03 * (1 - k * dt / kReachS)),
+                                             open_grip(grip, 1.0))}});
     for (int i = 0; i * dt < open_at + 0.3 - 1e-9; ++i) {
       const double t = i * dt;
       const double swing = 20 * kDeg * std::clamp((t - 0.3) / 0.5, 0.0, 1.0) + (t >= jump_at - 1e-9 ? 5 * kDeg : 0.0);
       const HandPoseParams shape = t < 0.3 ? closing_grip(grip, t) : t < open_at - 1e-9 ? grip : open_grip(grip, 1.0);
-      world.step(dt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, swing), shape)}});
+      world.step(dt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, swing, kPinchLift), shape)}});
       const bool held = world.body_grasp(box.lid).grasped;
       grasped = grasped || held;
       released = released || (grasped && !held);
@@ -798,11 +808,14 @@ TEST(JointsWorld, LidLetGoAtItsStopStaysThereUntilTheHandPushesIt) {
   const JewelryBox box = build_jewelry_box(world);
   const HandId hand = world.add_hand(HandDef{});
   const double goal = 93 * kDeg;
-  auto step = [&](double angle, const HandPoseParams& shape) {
-    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle), shape)}});
+  auto step = [&](double angle, const HandPoseParams& shape, double lift = kPinchLift) {
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, box.lid_pinch_palm(world, Handedness::Right, angle, lift), shape)}});
     return world.joint_state(box.hinge).value;
   };
   bool grasped = false;
+  // Comes down open from 3 cm above (as in LidLetGoRightAfterATrackerJumpRestsAlikeAtEveryFrameRate), then closes.
+  for (int k = 0; k * kDt < kReachS - 1e-9; ++k)
+    step(0.0, open_grip(lid_pinch_shape(), 1.0), kPinchLift + 0.03 * (1 - k * kDt / kReachS));
   for (int i = 0; i < 20; ++i) step(0.0, closing_grip(lid_pinch_shape(), i * kDt));
   for (int i = 1; i <= 60; ++i) {
     step(goal * i / 60, lid_pinch_shape());

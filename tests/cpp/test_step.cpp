@@ -362,6 +362,60 @@ TEST(Step, WrapAClosingThumbThatStopsInAFreeCubeDoesNotMakeItJump) {
   EXPECT_LT(moved, 1e-9);
 }
 
+// The intent rule: a hand that appears inside a body (its first tracked frame: tracking began or came back, or it
+// teleported) was never seen reaching the body and closing onto its surface, so it begins no grasp of it until the
+// two come apart (HandBodyPair::appeared_inside, docs/grasp.md "A hand that appears inside a body"). The 4 cm cube
+// rests on the ground, default world (Wrap). At `inside` the pinch's index pad is 2 mm deeper than a particle
+// radius into its +x face (particle centres inside) and its thumb, opened 6 cm wider than the pinch's open(), is
+// clear of the -x face; the thumb then closes onto that face (3 mm into it, were the cube where it rested) over 15
+// frames and holds 10:
+// - appears at `inside` and closes: no grasp, though the hand touches the cube throughout (with the rule switched
+//   off in a scratch build: 1 grasp);
+// - first tracked 5 cm off along +x, reaches `inside` over 20 frames (the index pad enters through the +x face,
+//   pressing the cube 4 mm along the ground) and closes: grasped;
+// - appears at `inside`, goes 3 cm off along +x and back (no contact between: they came apart) and closes: grasped.
+// (Under the fit, eq. 2 throws the cube 65 mm as the hand comes in, out of the pinch: not this rule's scene.)
+TEST(Step, AHandThatAppearsInsideABodyGraspsItOnlyAfterReachingItFromOutside) {
+  {
+    const WorldDef def;
+    const char* push = def.push_model == PushModel::Wrap ? "wrap" : "fit";
+    enum class Before { Nothing, Reach, LeaveAndReturn };
+    for (Before before : {Before::Nothing, Before::Reach, Before::LeaveAndReturn}) {
+      const char* what = before == Before::Nothing ? "appears inside" : before == Before::Reach ? "reaches from 5 cm" : "leaves and returns";
+      Scene s(def);
+      const double radius = s.world.hand_model(s.hand).particle_radius;
+      // The pad touches the +x face by 0.5 mm at s.rest: radius + 1.5 mm further puts its centres 2 mm inside, and
+      // moves the thumb as far out of the -x face.
+      const double deeper = radius + 0.0015;
+      const Pose inside = translation(Vec3(-deeper, 0, 0)) * s.rest;
+      auto off = [&](double d) { return translation(Vec3(d, 0, 0)) * inside; };
+      const double wide = s.open() - 0.06, closed = s.hold() + deeper;
+      if (before == Before::Reach)
+        for (int i = 0; i < 20; ++i) s.step({s.pinch.frame(off(0.05 * (1 - smoothstep(i / 19.0))), wide)});
+      if (before == Before::LeaveAndReturn) {
+        s.step({s.pinch.frame(inside, wide)});
+        EXPECT_GT(s.world.body_contact_count(s.box, s.hand), 0) << push << ": it appeared touching";
+        bool apart = false;
+        for (int i = 1; i < 40; ++i) {  // out in 20 frames, back in 20, at rest at both ends
+          s.step({s.pinch.frame(off(0.03 * smoothstep(1 - std::abs(i - 20) / 20.0)), wide)});
+          apart = apart || s.world.body_contact_count(s.box, s.hand) == 0;
+        }
+        EXPECT_TRUE(apart) << push;
+      }
+      for (int i = 0; i < 5; ++i) s.step({s.pinch.frame(inside, wide)});
+      const int touching = s.world.body_contact_count(s.box, s.hand);
+      for (int i = 1; i <= 15; ++i) s.step({s.pinch.frame(inside, wide + (closed - wide) * i / 15.0)});
+      for (int i = 0; i < 10; ++i) s.step({s.pinch.frame(inside, closed)});
+      const int grasps = count(s.log, EventType::GraspBegin);
+      std::printf("%s push, %s: %d contacts before closing, %d grasp(s), the cube moved %.1f mm\n", push, what,
+                  touching, grasps, 1e3 * (s.world.body_pose(s.box).position - s.rest.position).norm());
+      EXPECT_GT(touching, 0) << push << ", " << what;
+      EXPECT_EQ(grasps, before == Before::Nothing ? 0 : 1) << push << ", " << what;
+      EXPECT_EQ(s.world.body_grasp(s.box).grasped, before != Before::Nothing) << push << ", " << what;
+    }
+  }
+}
+
 // GraspSettings::squeeze_distance: the pinch whose thumb closes 2.3 cm onto the cube (relative to the palm) squeezes
 // it and grasps it; the cube put into the same hand held still with its thumb already closed (no articulation)
 // gives the same opposing contacts and is not grasped, though GraspSettings::contacts() grasps it (the default, the

@@ -324,9 +324,11 @@ TEST_P(stiff, TenThousandParticles) {
   hd.particle_count = 10000;
   const HandId hand = world.add_hand(hd);
   EXPECT_EQ(world.hand_model(hand).particle_count(), 10000);
-  for (int i = 0; i < 70; ++i) {
-    const Pose palm = box.lid_pinch_palm(world, Handedness::Right, 45 * kDeg * std::clamp((i - 20) / 40.0, 0.0, 1.0));
-    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), i * kDt))}});
+  for (int i = 0; i < 80; ++i) {  // comes down onto the lid from 3 cm above in 10 frames, then as before
+    const double reach = 0.03 * std::max(0.0, 1 - i / 10.0);
+    const Pose palm =
+        box.lid_pinch_palm(world, Handedness::Right, 45 * kDeg * std::clamp((i - 30) / 40.0, 0.0, 1.0), reach);
+    world.step(kDt, {{hand, make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), (i - 10) * kDt))}});
     ASSERT_LE(world.joint_state(box.hinge).violation, 1e-9);
   }
   EXPECT_TRUE(world.body_grasp(box.lid).grasped);
@@ -556,14 +558,17 @@ struct TwoHands {
     if (!hinged) s.world.remove_joint(s.box.hinge);
   }
   // The hands' palms: the lid pinch at `angle`, lifted by `lift`, each moved `apart` outwards along the lip.
-  std::vector<HandFrame> frames(double angle, double lift, double apart, bool with_left = true) const {
+  std::vector<HandFrame> frames(double angle, double lift, double apart) const {
     const Vec3 side = s.world.body_pose(s.box.base).orientation * Vec3::UnitX();
+    const Vec3 front = s.world.body_pose(s.box.base).orientation * Vec3::UnitZ();  // away from the hinge
     std::vector<HandFrame> f;
     for (Handedness h : {Handedness::Right, Handedness::Left}) {
-      if (h == Handedness::Left && !with_left) break;
       const double sign = h == Handedness::Right ? 1.0 : -1.0;
       Pose palm = s.box.lid_pinch_palm(s.world, h, angle, lift);
       palm.position += sign * (0.05 + apart) * side;
+      // the left hand reaches its place from 5 cm in front of it, sliding in over and under the lip, while the right
+      // grasps (a hand that appeared on the lid would not be seen reaching it: HandBodyPair::appeared_inside)
+      if (h == Handedness::Left && s.time < left_from) palm.position += 0.05 * (1 - s.time / left_from) * front;
       // each hand closes its pinch from the frame it arrives
       const double closing_s = h == Handedness::Right ? s.time : s.time - left_from;
       f.push_back(make_hand_frame(h, palm, closing_grip(lid_pinch_shape(), closing_s)));
@@ -579,9 +584,8 @@ void pull_apart(const WorldDef& wd) {
     Scene& s = t.s;
     const HandId right = s.hand;
     const Vec3 rest = s.world.body_pose(s.box.lid).position;
-    // The right hand grasps first, the left joins 20 frames later.
-    for (int i = 0; i < 20; ++i) s.step(kDt, t.frames(0, 0, 0, false));
-    for (int i = 0; i < 20; ++i) s.step(kDt, t.frames(0, 0, 0));
+    // The right hand grasps first, the left (reaching its place from above) joins 20 frames later.
+    for (int i = 0; i < 40; ++i) s.step(kDt, t.frames(0, 0, 0));
     GraspInfo g = s.world.body_grasp(s.box.lid);
     std::printf("%s, %s lid: moved %.3f mm before both hands hold it\n",
                 wd.push_model == PushModel::Wrap ? "wrap" : "fit", hinged ? "hinged" : "free",

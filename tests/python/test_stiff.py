@@ -193,10 +193,15 @@ def scaled_box_keeps_its_hinge(s):
 def two_hands_pull_the_lid_apart(s):
     right, left = s.hands
     side = rotate(s.world.body_pose(s.box.base)[3:], [1.0, 0, 0])  # the base's x axis, along the lip
-    frames = lambda angle, apart, both=True: [s.pinch(angle, offset=(0.05 + apart) * side)] + (  # noqa: E731
-        [s.pinch(angle, offset=-(0.05 + apart) * side, handedness=LEFT)] if both else [])
-    for _ in range(20):
-        s.step(frames(0, 0, both=False))
+    front = rotate(s.world.body_pose(s.box.base)[3:], [0, 0, 1.0])  # the base's z axis, away from the hinge
+    frames = lambda angle, apart, reach=0.0: [  # noqa: E731
+        s.pinch(angle, offset=(0.05 + apart) * side),
+        s.pinch(angle, offset=-(0.05 + apart) * side + reach * front, handedness=LEFT)]
+    # the left hand closes once there, after reaching its place from 5 cm in front, sliding in over and under the lip
+    # (a hand that appeared on the lid would not be seen reaching it: appeared_inside)
+    s.arrived[LEFT] = 20 * DT
+    for i in range(20):
+        s.step(frames(0, 0, 0.05 * (1 - i / 20)))
     for _ in range(20):
         s.step(frames(0, 0))
     for i in range(1, 41):

@@ -18,9 +18,15 @@ from ..quat import quat_rotate
 R = _h.Handedness.RIGHT
 
 
+# The hand reaches its pinch open, from REACH_M in front of it (away from the hinge) over REACH_FRAMES frames, sliding
+# in over and under the lip: a hand that appeared there, a particle's centre already in the lid or the base, would
+# begin no grasp of it under the intent rule (appeared_inside: the tracker never saw it close onto the surface).
+REACH_M, REACH_FRAMES = 0.03, 10
+
+
 def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_overhang: float = 0.015,
                            hand_def=None, world_def=None):
-    """A right hand arrives open at the closed lid and closes its pinch there (lid_pinch_palm, closing_grip of
+    """A right hand arrives open at the closed lid (from REACH_M in front) and closes its pinch there (lid_pinch_palm, closing_grip of
     lid_pinch_shape) with its palm `depth_m` closer to the hinge than the scene's pose, so the thumb grazes the
     base's front face, and swings the lid open over one second. Returns (base displacement m, max particles touching the base, lid grasped). `hand_def`:
     a right-hand HandDef (default: HandDef()); `world_def` (default: WorldDef()), e.g. to choose the grasp rule."""
@@ -32,12 +38,12 @@ def base_thrown_by_a_touch(depth_m: float = 0.004, swing_deg: float = 95.0, lid_
     b0 = np.asarray(w.body_pose(box.base), float)
     touching, grasped = 0, False
     pinch = _h.lid_pinch_shape()
-    for i in range(110):
+    for i in range(-REACH_FRAMES, 110):
         angle = min(max((i - 20) / 60, 0.0), 1.0) * math.radians(swing_deg)
         p = np.asarray(box.lid_pinch_palm(w, R, 0.0), float)
-        p[:3] += quat_rotate(b0[3:], [0.0, 0.0, -depth_m])
+        p[:3] += quat_rotate(b0[3:], [0.0, 0.0, REACH_M * max(0.0, -i / REACH_FRAMES) - depth_m])
         p = _users.swing_pose(p, np.asarray(box.hinge_pivot(w)), np.asarray(box.hinge_axis(w)), angle)
-        w.step(1 / 60, {hand: _h.make_hand_frame(R, p, params=_h.closing_grip(pinch, i / 60))})
+        w.step(1 / 60, {hand: _h.make_hand_frame(R, p, params=_h.closing_grip(pinch, max(i, 0) / 60))})
         touching = max(touching, w.body_contact_count(box.base, hand))
         grasped = grasped or w.body_grasp(box.lid).grasped
     moved = float(np.linalg.norm(np.asarray(w.body_pose(box.base))[:3] - b0[:3]))
