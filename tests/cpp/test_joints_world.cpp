@@ -52,6 +52,22 @@ struct Pendulum {
   }
 };
 
+// The jewelry box on a fixed base (it keeps a test about the lid), under Wrap, with one hand: the world of the
+// lid tests that compare frame rates.
+struct FixedBaseLid {
+  World world{[] {
+    WorldDef d;
+    d.push_model = PushModel::Wrap;
+    return d;
+  }()};
+  JewelryBox box = [this] {
+    JewelryBoxDef def;
+    def.base_mass = 0;
+    return build_jewelry_box(world, def);
+  }();
+  HandId hand = world.add_hand(HandDef{});
+};
+
 // The hand scripts below close their pinch on the lid (closing_grip) before they swing it: each runs with both
 // grasp rules (grasp_rules.h).
 class JointsWorldHand : public testing::TestWithParam<test::GraspRule> {};
@@ -621,13 +637,10 @@ HANDSIM_BOTH_GRASP_RULES(JointsWorldHand);
 TEST(JointsWorld, LidPushedFromBothFacesSwingsAlikeAtEveryFrameRate) {
   std::vector<double> largest;
   for (int rate : {30, 60, 120}) {
-    WorldDef d;
-    d.push_model = PushModel::Wrap;
-    World world(d);
-    JewelryBoxDef def;
-    def.base_mass = 0;  // a fixed base keeps the test about the lid
-    const JewelryBox box = build_jewelry_box(world, def);
-    const HandId hand = world.add_hand(HandDef{});
+    FixedBaseLid scene;
+    World& world = scene.world;
+    const JewelryBox& box = scene.box;
+    const HandId hand = scene.hand;
     const double dt = 1.0 / rate;
     double most = 0, last = 0, still_jump = 0;  // still_jump: the largest change in a frame once the hand stopped
     for (int i = 0; i <= int(1.5 * rate); ++i) {
@@ -702,13 +715,10 @@ TEST(JointsWorld, LidLetGoRightAfterATrackerJumpRestsAlikeAtEveryFrameRate) {
   std::vector<double> rest;
   double bound = 0;
   for (int rate : {30, 120}) {
-    WorldDef d;
-    d.push_model = PushModel::Wrap;
-    World world(d);
-    JewelryBoxDef def;
-    def.base_mass = 0;  // a fixed base keeps the test about the lid
-    const JewelryBox box = build_jewelry_box(world, def);
-    const HandId hand = world.add_hand(HandDef{});
+    FixedBaseLid scene;
+    World& world = scene.world;
+    const JewelryBox& box = scene.box;
+    const HandId hand = scene.hand;
     const double dt = 1.0 / rate, jump_at = 0.9, open_at = jump_at + 1.0 / 30;
     HandPoseParams grip = lid_pinch_shape();
     grip.curl[2] = grip.curl[3] = grip.curl[4] = 0.6;  // the fingers off the lid curled: the grasp ends as they open
@@ -755,13 +765,10 @@ TEST(JointsWorld, LidReleasedWhileSwingingLeavesFromItsHandAtEveryFrameRate) {
   std::vector<double> behind, rates;
   const double swing_rate = 60 * kDeg, open_at = 0.9;
   for (int rate : {30, 60, 120}) {
-    WorldDef d;
-    d.push_model = PushModel::Wrap;
-    World world(d);
-    JewelryBoxDef def;
-    def.base_mass = 0;  // a fixed base keeps the test about the lid
-    const JewelryBox box = build_jewelry_box(world, def);
-    const HandId hand = world.add_hand(HandDef{});
+    FixedBaseLid scene;
+    World& world = scene.world;
+    const JewelryBox& box = scene.box;
+    const HandId hand = scene.hand;
     const double dt = 1.0 / rate;
     HandPoseParams grip = lid_pinch_shape();
     grip.curl[2] = grip.curl[3] = grip.curl[4] = 0.6;  // the fingers off the lid curled: the grasp ends as they open
