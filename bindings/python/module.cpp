@@ -5,6 +5,9 @@
 
 namespace py = pybind11;
 
+// The module does not declare itself free-threading safe (no py::mod_gil_not_used()): bind_world.cpp's kept
+// StepReport objects and the per-type lookups it caches are shared between threads and rely on the GIL, so a
+// free-threaded interpreter (3.13t) turns the GIL back on when it imports this module rather than race on them.
 PYBIND11_MODULE(_core, m) {
   m.doc() = "handsim C++ core: hands, grasping and jointed objects (Kim & Park, Algorithm 1)";
   m.attr("__version__") = handsim::version();
