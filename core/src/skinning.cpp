@@ -1,6 +1,7 @@
 #include "skinning.h"
 
 #include "deformation.h"
+#include "simd4.h"
 #include "world_impl.h"
 
 #include <algorithm>
@@ -42,26 +43,106 @@ BoneTransform to_matrix(const Pose& p) {
   return m;
 }
 
+// B_j = pose_j * bind_j^-1, the definition (and the kernel's reference: tests/cpp/test_hand_skinning.cpp).
+BoneTransform bone_of(const HandModel& model, const JointPose& jp, int j) {
+  return to_matrix(Pose{jp.position, jp.orientation.normalized()} * model.bind_inverse[j]);
+}
+
+#ifdef HANDSIM_AVX2_KERNELS
+using simd4::V4;
+// A 4-double load at a Vec3 reads the padding before the quaternion that follows it (lane 3: unused).
+static_assert(sizeof(Vec3) == 24 && alignof(Quat) >= 16, "a Vec3 followed by a Quat leaves 8 bytes of padding");
+
+// bone_of for the joints j[0..3] at once, lane k for j[k]: Eigen's arithmetic in Eigen's order, so each lane's
+// bits are bone_of's -- normalized() as coeffs / sqrt((x x + z z) + (y y + w w)) (its SSE2 sum), the position as
+// q * v (uv = 2 q.vec x v, v + w uv + q.vec x uv) + p, the product as Eigen's SSE2 quat_product, then
+// toRotationMatrix. The joints' numbers are loaded as rows and transposed into lanes, the bones back.
+HANDSIM_AVX2 void bone_block(const HandModel& model, const HandFrame& frame, const int* j, BoneTransform* const* out) {
+  using simd4::load;
+  using simd4::transpose;
+  const auto& J = frame.joints;
+  const auto& B = model.bind_inverse;
+  V4 x = load(J[j[0]].orientation.coeffs().data()), y = load(J[j[1]].orientation.coeffs().data()),
+     z = load(J[j[2]].orientation.coeffs().data()), w = load(J[j[3]].orientation.coeffs().data());
+  transpose(x, y, z, w);
+  V4 px = load(J[j[0]].position.data()), py = load(J[j[1]].position.data()), pz = load(J[j[2]].position.data()),
+     unused = load(J[j[3]].position.data());
+  transpose(px, py, pz, unused);
+  V4 bx = load(B[j[0]].orientation.coeffs().data()), by = load(B[j[1]].orientation.coeffs().data()),
+     bz = load(B[j[2]].orientation.coeffs().data()), bw = load(B[j[3]].orientation.coeffs().data());
+  transpose(bx, by, bz, bw);
+  V4 vx = load(B[j[0]].position.data()), vy = load(B[j[1]].position.data()), vz = load(B[j[2]].position.data());
+  unused = load(B[j[3]].position.data());
+  transpose(vx, vy, vz, unused);
+  V4 n = simd4::sqrt((x * x + z * z) + (y * y + w * w));
+  x /= n, y /= n, z /= n, w /= n;
+  V4 ux = y * vz - z * vy, uy = z * vx - x * vz, uz = x * vy - y * vx;
+  ux += ux, uy += uy, uz += uz;
+  V4 m[12];  // column-major 3x4, as BoneTransform
+  m[9] = ((vx + w * ux) + (y * uz - z * uy)) + px;
+  m[10] = ((vy + w * uy) + (z * ux - x * uz)) + py;
+  m[11] = ((vz + w * uz) + (x * uy - y * ux)) + pz;
+  V4 qx = (w * bx + y * bz) - (z * by - x * bw), qy = (w * by + y * bw) + (z * bx - x * bz);
+  V4 qz = (w * bz - y * bx) + (z * bw + x * by), qw = (w * bw - y * by) - (z * bz + x * bx);
+  n = simd4::sqrt((qx * qx + qz * qz) + (qy * qy + qw * qw));
+  qx /= n, qy /= n, qz /= n, qw /= n;
+  const V4 tx = 2 * qx, ty = 2 * qy, tz = 2 * qz, twx = tx * qw, twy = ty * qw, twz = tz * qw, txx = tx * qx,
+           txy = ty * qx, txz = tz * qx, tyy = ty * qy, tyz = tz * qy, tzz = tz * qz;
+  m[0] = 1 - (tyy + tzz), m[3] = txy - twz, m[6] = txz + twy;
+  m[1] = txy + twz, m[4] = 1 - (txx + tzz), m[7] = tyz - twx;
+  m[2] = txz - twy, m[5] = tyz + twx, m[8] = 1 - (txx + tyy);
+  transpose(m[0], m[1], m[2], m[3]);
+  transpose(m[4], m[5], m[6], m[7]);
+  transpose(m[8], m[9], m[10], m[11]);
+  for (int k = 0; k < 4; ++k)
+    for (int c = 0; c < 3; ++c) simd4::store(out[k]->data() + 4 * c, m[4 * c + k]);
+}
+
+// Every joint's bone_of, valid or not (an invalid joint's is replaced after).
+__attribute__((target("avx2"))) void all_bones_avx2(const HandModel& model, const HandFrame& frame,
+                                                    std::array<BoneTransform, kHandJointCount>& bones) {
+  static_assert(kHandJointCount == 26, "six blocks of four and one of two");
+#pragma GCC unroll 8
+  for (int b = 0; b < 24; b += 4) {
+    const int j[4] = {b, b + 1, b + 2, b + 3};
+    BoneTransform* const out[4] = {&bones[b], &bones[b + 1], &bones[b + 2], &bones[b + 3]};
+    bone_block(model, frame, j, out);
+  }
+  BoneTransform spare[2];
+  const int j[4] = {24, 25, 25, 25};
+  BoneTransform* const out[4] = {&bones[24], &bones[25], &spare[0], &spare[1]};
+  bone_block(model, frame, j, out);
+}
+#endif
+
+}  // namespace
+
+namespace {
+// An invalid joint is rigidly attached to its parent: pose_j = pose_p * bind_p^-1 * bind_j, so B_j = B_p.
+// Parents come before children but for the palm, whose parent (the wrist) is valid in a tracked frame as it is.
+void follow_parents(const HandFrame& frame, std::array<BoneTransform, kHandJointCount>& bones) {
+  for (int j = 0; j < kHandJointCount; ++j)
+    if (!frame.joints[j].valid) bones[j] = bones[parent_of(j)];
+}
 }  // namespace
 
 void compute_bone_transforms(const HandModel& model, const HandFrame& frame,
                              std::array<BoneTransform, kHandJointCount>& bones) {
-  // Parents come before children in OpenXR order except the palm (parent: wrist), so do the wrist first.
-  std::array<bool, kHandJointCount> done{};
-  auto compute = [&](int j) {
-    const JointPose& jp = frame.joints[j];
-    if (jp.valid) {
-      Pose current{jp.position, jp.orientation.normalized()};
-      bones[j] = to_matrix(current * model.bind_inverse[j]);
-    } else {
-      // Rigidly attached to the parent: pose_j = pose_p * bind_p^-1 * bind_j, so B_j = B_p.
-      bones[j] = bones[parent_of(j)];
-    }
-    done[j] = true;
-  };
-  compute(kWrist);
+#ifdef HANDSIM_AVX2_KERNELS
+  if (simd4::has_avx2()) {
+    all_bones_avx2(model, frame, bones);
+    follow_parents(frame, bones);
+    return;
+  }
+#endif
+  compute_bone_transforms_scalar(model, frame, bones);
+}
+
+void compute_bone_transforms_scalar(const HandModel& model, const HandFrame& frame,
+                                    std::array<BoneTransform, kHandJointCount>& bones) {
   for (int j = 0; j < kHandJointCount; ++j)
-    if (!done[j]) compute(j);
+    if (frame.joints[j].valid) bones[j] = bone_of(model, frame.joints[j], j);
+  follow_parents(frame, bones);
 }
 
 void skin_points(const Eigen::Matrix3Xd& bind, const Eigen::Matrix<int, 4, Eigen::Dynamic>& bone_ids,

@@ -7,8 +7,12 @@ namespace handsim {
 
 // B_j = pose_j * bind_j^-1 for every joint. An invalid joint of a tracked frame follows its nearest valid
 // parent rigidly (its bind offset to that parent is kept), so a lost finger joint does not tear the mesh.
+// A tracked frame (palm and wrist valid). Four bones at a time where the CPU has AVX2, with the bits of
+// compute_bone_transforms_scalar (the formula one bone at a time, and the path elsewhere).
 void compute_bone_transforms(const HandModel& model, const HandFrame& frame,
                              std::array<BoneTransform, kHandJointCount>& bones);
+void compute_bone_transforms_scalar(const HandModel& model, const HandFrame& frame,
+                                    std::array<BoneTransform, kHandJointCount>& bones);
 
 // out.col(i) = sum_k weights(k,i) * B[bones(k,i)] * bind.col(i): the per-point reference formula (the tests
 // compare the grouped paths against it).

@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <map>
+#include <random>
 
 using namespace handsim;
 
@@ -280,6 +281,40 @@ TEST(HandSkinning, InvalidFingerJointFollowsItsParent) {
   pose_hand(m, g, s);
   EXPECT_TRUE(s.tracked_positions.allFinite());
   EXPECT_TRUE(s.bones[kMiddleDistal].isApprox(s.bones[kMiddleIntermediate], 1e-15));
+}
+
+// The step's bones (four at a time where the CPU has AVX2) are the one-bone-at-a-time formula's, bit for bit:
+// random joint positions and orientations (unit and not, near and far from the origin), some joints invalid
+// (their numbers garbage, NaN included), for both hands.
+TEST(HandSkinning, BonesAreTheScalarFormulasBitForBit) {
+  std::mt19937_64 rng(25);
+  std::normal_distribution<double> gauss(0, 1);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  int compared = 0;
+  for (Handedness hand : {Handedness::Right, Handedness::Left}) {
+    HandDef def;
+    def.handedness = hand;
+    const HandModel m = build_hand_model(def);
+    for (int t = 0; t < 2000; ++t) {
+      HandFrame f;
+      f.handedness = hand;
+      for (int j = 0; j < kHandJointCount; ++j) {
+        JointPose& jp = f.joints[j];
+        jp.position = Vec3(uniform(rng), uniform(rng), uniform(rng)) * (t % 5 == 0 ? 1e3 : 1.0);
+        jp.orientation = Quat(gauss(rng), gauss(rng), gauss(rng), gauss(rng));
+        jp.orientation.normalize();
+        if (t % 3) jp.orientation.coeffs() *= 1 + 1e-6 * uniform(rng);  // as a tracker's, near unit
+        jp.valid = j == kPalm || j == kWrist || t % 4 != 1 || uniform(rng) > 0;
+        if (!jp.valid && j % 2) jp.orientation.coeffs().setConstant(std::nan(""));
+      }
+      std::array<BoneTransform, kHandJointCount> fast, scalar;
+      compute_bone_transforms(m, f, fast);
+      compute_bone_transforms_scalar(m, f, scalar);
+      ASSERT_EQ(std::memcmp(fast.data(), scalar.data(), sizeof fast), 0) << "frame " << t;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 4000);
 }
 
 TEST(HandSkinning, SuppliedMeshIsValidatedAndUsable) {
