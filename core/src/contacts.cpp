@@ -3,6 +3,8 @@
 #include "contacts.h"
 
 #include "grasp.h"
+#include "simd4.h"
+#include "skinning.h"
 #include "validate.h"
 #include "world_impl.h"
 
@@ -410,7 +412,102 @@ BoneTransform in_body(const Mat3& Rt, const Vec3& origin, const BoneTransform& b
   return m;
 }
 
+// A bone's move since `then` (its transform in the body frame then): |dR| reach + |dR j + dt|, dR and dt the
+// change of its transform in the body frame (in_body), j its joint (holds_still).
+double bone_move(const Mat3& Rt, const Vec3& origin, const BoneTransform& bone, const BoneTransform& then,
+                 const Vec3& joint, double reach) {
+  const BoneTransform now = in_body(Rt, origin, bone);
+  const Mat3 dR = now.leftCols<3>() - then.leftCols<3>();
+  const Vec3 dj = dR * joint + (now.col(3) - then.col(3));
+  return dR.norm() * reach + dj.norm();
+}
+
+#ifdef HANDSIM_AVX2_KERNELS
+using simd4::V4;
+
+// Row i of R times the lanes' column (x, y, z), summed as Eigen's fixed-size product sums it: rows 0 and 1
+// from the left (its two-row packets), row 2 from the right (its scalar sum).
+HANDSIM_AVX2 V4 row_times(const Mat3& R, int i, const V4& x, const V4& y, const V4& z) {
+  const V4 a = simd4::splat(R(i, 0)) * x, b = simd4::splat(R(i, 1)) * y, c = simd4::splat(R(i, 2)) * z;
+  return i < 2 ? (a + b) + c : a + (b + c);
+}
+
+// The 12 numbers (column-major) of the bones b[0..3], lane l from b[l].
+HANDSIM_AVX2 void load_bones(const BoneTransform* const* b, V4* m) {
+  for (int c = 0; c < 12; c += 4) {
+    for (int l = 0; l < 4; ++l) m[c + l] = simd4::load(b[l]->data() + c);
+    simd4::transpose(m[c], m[c + 1], m[c + 2], m[c + 3]);
+  }
+}
+
+// bone_move of the bones k[0..3] at once, lane l for k[l], with bone_move's bits: in_body's products and dR j
+// summed as Eigen sums them (row_times), dR.norm() as its SSE2 sum of the nine squares (column-major)
+// (((s0 + s2) + (s4 + s6)) + ((s1 + s3) + (s5 + s7))) + s8, dj.norm() as (x x + y y) + z z.
+HANDSIM_AVX2 V4 bone_moves(const Mat3& Rt, const Vec3& origin, const BoneTransform* const* now,
+                           const BoneTransform* const* then, const HandReach& reach, const int* k) {
+  V4 b[12], t[12], dR[9], dj[3], s[9];
+  load_bones(now, b);
+  load_bones(then, t);
+  for (int c = 0; c < 3; ++c)
+    for (int i = 0; i < 3; ++i) dR[3 * c + i] = row_times(Rt, i, b[3 * c], b[3 * c + 1], b[3 * c + 2]) - t[3 * c + i];
+  const V4 px = b[9] - simd4::splat(origin.x()), py = b[10] - simd4::splat(origin.y()),
+           pz = b[11] - simd4::splat(origin.z());
+  const auto& j = reach.bind_joint;
+  const V4 jx{j[k[0]].x(), j[k[1]].x(), j[k[2]].x(), j[k[3]].x()};
+  const V4 jy{j[k[0]].y(), j[k[1]].y(), j[k[2]].y(), j[k[3]].y()};
+  const V4 jz{j[k[0]].z(), j[k[1]].z(), j[k[2]].z(), j[k[3]].z()};
+  for (int i = 0; i < 3; ++i) {
+    const V4 dt = row_times(Rt, i, px, py, pz) - t[9 + i];
+    const V4 a = dR[i] * jx, bb = dR[3 + i] * jy, c = dR[6 + i] * jz;
+    dj[i] = (i < 2 ? (a + bb) + c : a + (bb + c)) + dt;
+  }
+  for (int e = 0; e < 9; ++e) s[e] = dR[e] * dR[e];
+  const V4 rotation = simd4::sqrt((((s[0] + s[2]) + (s[4] + s[6])) + ((s[1] + s[3]) + (s[5] + s[7]))) + s[8]);
+  const V4 joint = simd4::sqrt((dj[0] * dj[0] + dj[1] * dj[1]) + dj[2] * dj[2]);
+  const V4 r{reach.reach[k[0]], reach.reach[k[1]], reach.reach[k[2]], reach.reach[k[3]]};
+  return rotation * r + joint;
+}
+
+// bones_within_scalar four bones at a time (the last block: bones 24, 25 and 25 twice).
+__attribute__((target("avx2"))) bool bones_within_avx2(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones,
+                                                       const BoneTransform* then, const HandReach& reach,
+                                                       double limit, double* moves) {
+  static_assert(kHandJointCount == 26, "six blocks of four and one of two");
+  for (int first = 0; first < kHandJointCount; first += 4) {
+    const int k[4] = {first, first + 1, std::min(first + 2, kHandJointCount - 1),
+                      std::min(first + 3, kHandJointCount - 1)};
+    const BoneTransform* const now[4] = {&bones[k[0]], &bones[k[1]], &bones[k[2]], &bones[k[3]]};
+    const BoneTransform* const old[4] = {&then[k[0]], &then[k[1]], &then[k[2]], &then[k[3]]};
+    const V4 m = bone_moves(Rt, origin, now, old, reach, k);
+    for (int l = 0; l < 4 && first + l < kHandJointCount; ++l) {
+      if (reach.reach[first + l] < 0) continue;  // moves no particle
+      moves[first + l] = m[l];
+      if (!(m[l] <= limit)) return false;
+    }
+  }
+  return true;
+}
+#endif
+
 }  // namespace
+
+bool bones_within(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones, const BoneTransform* then,
+                  const HandReach& reach, double limit, double* moves) {
+#ifdef HANDSIM_AVX2_KERNELS
+  if (simd4::has_avx2()) return bones_within_avx2(Rt, origin, bones, then, reach, limit, moves);
+#endif
+  return bones_within_scalar(Rt, origin, bones, then, reach, limit, moves);
+}
+
+bool bones_within_scalar(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones, const BoneTransform* then,
+                         const HandReach& reach, double limit, double* moves) {
+  for (int k = 0; k < kHandJointCount; ++k) {
+    if (reach.reach[k] < 0) continue;  // moves no particle
+    moves[k] = bone_move(Rt, origin, bones[k], then[k], reach.bind_joint[k], reach.reach[k]);
+    if (!(moves[k] <= limit)) return false;
+  }
+  return true;
+}
 
 // Whether the pair is held by its hand, with a witness and an anchor, and no particle has moved more than
 // kHoldStill relative to the body since the anchor: per bone, a point p blended from it moved by
@@ -420,22 +517,15 @@ bool HandParticles::holds_still(const HandSlot& h, const Body& b, const HandBody
   if (pair.anchor.size() != kHandJointCount || !pair.tracker.grasped() || !b.held_by(hand) || pair.witness[0] < 0 ||
       pair.witness[0] == pair.witness[1])
     return false;
-  const Mat3 Rt = b.pose.orientation.normalized().toRotationMatrix().transpose();
   std::vector<BoneTransform>& anchored = pair.anchor_in_body;
-  const Mat3 At = anchored.size() < size_t(kHandJointCount)
-                      ? Mat3(pair.anchor_pose.orientation.normalized().toRotationMatrix().transpose())
-                      : Mat3::Zero();  // every bone is in `anchored` already
-  for (int k = 0; k < kHandJointCount; ++k) {
-    if (h.reach.reach[k] < 0) continue;  // moves no particle
-    const BoneTransform now = in_body(Rt, b.pose.position, h.state.bones[k]);
-    while (anchored.size() <= size_t(k))
-      anchored.push_back(in_body(At, pair.anchor_pose.position, pair.anchor[anchored.size()]));
-    const BoneTransform& then = anchored[k];
-    const Mat3 dR = now.leftCols<3>() - then.leftCols<3>();
-    const Vec3 dj = dR * h.reach.bind_joint[k] + (now.col(3) - then.col(3));
-    if (!(dR.norm() * h.reach.reach[k] + dj.norm() <= kHoldStill)) return false;
+  if (anchored.size() != size_t(kHandJointCount)) {
+    const Mat3 At = pair.anchor_pose.orientation.normalized().toRotationMatrix().transpose();
+    anchored.clear();
+    for (const BoneTransform& bone : pair.anchor) anchored.push_back(in_body(At, pair.anchor_pose.position, bone));
   }
-  return true;
+  const Mat3 Rt = b.pose.orientation.normalized().toRotationMatrix().transpose();
+  double moves[kHandJointCount];
+  return bones_within(Rt, b.pose.position, h.state.bones, anchored.data(), h.reach, kHoldStill, moves);
 }
 
 // The witness pass of a still pair: its two particles (skinned alone in pose_hands) against the body, as the full

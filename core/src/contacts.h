@@ -29,6 +29,18 @@ void local_box_in_world(const Vec3& llo, const Vec3& lhi, const Pose& pose, Vec3
 bool entry_face(const PreparedShape& ps, const Vec3& l, const Vec3& u, double max_time, Vec3& normal,
                 double& offset);
 
+struct HandReach;
+
+// The hold check's test (HandParticles::holds_still): whether every bone that moves particles (reach >= 0) has
+// moved at most `limit` relative to a body since `then` (the bones in the body's frame then; Rt and origin: the
+// body's world-to-body rotation and its position now). moves[k] gets bone k's move |dR| reach + |dR j + dt| for
+// the bones looked at (all of them when it returns true; it stops at the first that moved more). Four bones at a
+// time where the CPU has AVX2, with the bits of bones_within_scalar (one bone at a time, and the path elsewhere).
+bool bones_within(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones,
+                  const BoneTransform* then, const HandReach& reach, double limit, double* moves);
+bool bones_within_scalar(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones,
+                         const BoneTransform* then, const HandReach& reach, double limit, double* moves);
+
 class HandMotionHistory;
 class ArticulationHistory;
 

@@ -220,9 +220,9 @@ struct HandBodyPair {
   // path runs while no particle has moved farther than kHoldStill from where it was then, relative to the body.
   std::vector<BoneTransform> anchor;
   Pose anchor_pose;
-  // Not state: the anchor's bones in the frame of anchor_pose, bone by bone in order as holds_still first needs
-  // them (it stops at the first bone that moved), so a held still body pays for them once per anchor, not per
-  // step. Emptied when the anchor is set; a restored pair starts empty.
+  // Not state: the anchor's bones in the frame of anchor_pose, made at holds_still's first check of the anchor,
+  // so a held still body pays for them once per anchor, not per step. Emptied when the anchor is set; a restored
+  // pair starts empty.
   mutable std::vector<BoneTransform> anchor_in_body;
   // This step only. `still`: pose_hands found the hand still on the held body, so the body's particles were not
   // skinned. `lazy`: `contacts` hold the witness pair alone; complete_contacts makes the full list from the

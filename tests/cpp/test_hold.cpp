@@ -3,7 +3,9 @@
 // full pass (World::Impl::hold_path off): the same events, poses and joint values to the bit, and the same
 // contacts, deformed particles and render mesh when read, within what the carried entry faces allow (below);
 // and reading them changes nothing.
+#include "contacts.h"
 #include "handsim/scenes.h"
+#include "skinning.h"
 #include "world_internals.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +15,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <random>
 #include <tuple>
 
 using namespace handsim;
@@ -212,4 +215,49 @@ TEST(HoldPath, TheDeterminismScenarioMovesTheSameWithAndWithoutIt) {
       ASSERT_TRUE(same_bits(on->body_pose(a[k]), off->body_pose(b[k]))) << "frame " << i << ", body " << k;
   }
   std::printf("determinism scenario: %d of %d frames on the hold path\n", lazy_frames, kScenarioFrames);
+}
+
+// The hold check's per-bone moves (four bones at a time where the CPU has AVX2) are the one-bone-at-a-time
+// formula's, bit for bit, and both stop at the same bone: a random hand pose and body pose, the bones then made
+// by moving each bone in the body's frame by up to ~1 um (around kHoldStill) or not at all.
+TEST(HoldPath, TheStillCheckIsTheScalarFormulasBitForBit) {
+  const HandModel model = build_hand_model(HandDef{});
+  const HandReach reach = build_hand_reach(model);
+  std::mt19937_64 rng(25);
+  std::normal_distribution<double> gauss(0, 1);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  int stopped = 0;
+  for (int t = 0; t < 3000; ++t) {
+    const Quat q = Quat(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
+    const Mat3 Rt = q.toRotationMatrix().transpose();
+    const Vec3 origin = Vec3(uniform(rng), uniform(rng), uniform(rng)) * (t % 5 == 0 ? 100.0 : 1.0);
+    std::array<BoneTransform, kHandJointCount> bones;
+    std::vector<BoneTransform> then(kHandJointCount);
+    const double scale = t % 3 == 0 ? 0.0 : 1e-6 * std::abs(uniform(rng));
+    for (int k = 0; k < kHandJointCount; ++k) {
+      const Quat b = Quat(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized();
+      bones[k].leftCols<3>() = b.toRotationMatrix();
+      bones[k].col(3) = origin + Vec3(uniform(rng), uniform(rng), uniform(rng)) * 0.2;
+      then[k].leftCols<3>() = Rt * bones[k].leftCols<3>();
+      then[k].col(3) = Rt * (bones[k].col(3) - origin);
+      for (int e = 0; e < 12; ++e) then[k].data()[e] += scale * uniform(rng);
+    }
+    for (double limit : {std::numeric_limits<double>::infinity(), 1e-6}) {
+      double fast[kHandJointCount], scalar[kHandJointCount];
+      std::fill(fast, fast + kHandJointCount, -1.0);
+      std::fill(scalar, scalar + kHandJointCount, -1.0);
+      const bool a = bones_within(Rt, origin, bones, then.data(), reach, limit, fast);
+      const bool b = bones_within_scalar(Rt, origin, bones, then.data(), reach, limit, scalar);
+      ASSERT_EQ(a, b) << "pose " << t;
+      if (!a) {  // both stop at the first bone that moved more; the scalar one looked at no bone after it
+        const int at = int(std::find_if(scalar, scalar + kHandJointCount, [&](double m) { return m > limit; }) - scalar);
+        ASSERT_LT(at, kHandJointCount);
+        ASSERT_EQ(std::memcmp(fast, scalar, sizeof(double) * (at + 1)), 0) << "pose " << t;
+        ++stopped;
+      } else {
+        ASSERT_EQ(std::memcmp(fast, scalar, sizeof fast), 0) << "pose " << t;
+      }
+    }
+  }
+  EXPECT_GT(stopped, 500);  // the limit was met and missed
 }
