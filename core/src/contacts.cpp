@@ -425,51 +425,34 @@ double bone_move(const Mat3& Rt, const Vec3& origin, const BoneTransform& bone, 
 #ifdef HANDSIM_AVX2_KERNELS
 using simd4::V4;
 
-// Row i of R times the lanes' column (x, y, z), summed as Eigen's fixed-size product sums it: rows 0 and 1
-// from the left (its two-row packets), row 2 from the right (its scalar sum).
-HANDSIM_AVX2 V4 row_times(const Mat3& R, int i, const V4& x, const V4& y, const V4& z) {
-  const V4 a = simd4::splat(R(i, 0)) * x, b = simd4::splat(R(i, 1)) * y, c = simd4::splat(R(i, 2)) * z;
-  return i < 2 ? (a + b) + c : a + (b + c);
-}
-
-// The 12 numbers (column-major) of the bones b[0..3], lane l from b[l].
-HANDSIM_AVX2 void load_bones(const BoneTransform* const* b, V4* m) {
-  for (int c = 0; c < 12; c += 4) {
-    for (int l = 0; l < 4; ++l) m[c + l] = simd4::load(b[l]->data() + c);
-    simd4::transpose(m[c], m[c + 1], m[c + 2], m[c + 3]);
-  }
-}
-
-// bone_move of the bones k[0..3] at once, lane l for k[l], with bone_move's bits: in_body's products and dR j
+// bone_move of the bones now[0..3] (from bone `first` on) at once, lane l for now[l], with bone_move's bits: in_body's products and dR j
 // summed as Eigen sums them (row_times), dR.norm() as its SSE2 sum of the nine squares (column-major)
 // (((s0 + s2) + (s4 + s6)) + ((s1 + s3) + (s5 + s7))) + s8, dj.norm() as (x x + y y) + z z.
 HANDSIM_AVX2 V4 bone_moves(const Mat3& Rt, const Vec3& origin, const BoneTransform* const* now,
-                           const BoneTransform* const* then, const HandReach& reach, const int* k) {
+                           const BoneTransform* const* then, const HandReach& reach, int first) {
   V4 b[12], t[12], dR[9], dj[3], s[9];
-  load_bones(now, b);
-  load_bones(then, t);
+  simd4::load_bones(now, b);
+  simd4::load_bones(then, t);
   for (int c = 0; c < 3; ++c)
-    for (int i = 0; i < 3; ++i) dR[3 * c + i] = row_times(Rt, i, b[3 * c], b[3 * c + 1], b[3 * c + 2]) - t[3 * c + i];
+    for (int i = 0; i < 3; ++i) dR[3 * c + i] = simd4::row_times(Rt, i, b[3 * c], b[3 * c + 1], b[3 * c + 2]) - t[3 * c + i];
   const V4 px = b[9] - simd4::splat(origin.x()), py = b[10] - simd4::splat(origin.y()),
            pz = b[11] - simd4::splat(origin.z());
-  const auto& j = reach.bind_joint;
-  const V4 jx{j[k[0]].x(), j[k[1]].x(), j[k[2]].x(), j[k[3]].x()};
-  const V4 jy{j[k[0]].y(), j[k[1]].y(), j[k[2]].y(), j[k[3]].y()};
-  const V4 jz{j[k[0]].z(), j[k[1]].z(), j[k[2]].z(), j[k[3]].z()};
+  const V4 jx = simd4::load(&reach.lanes[0][first]), jy = simd4::load(&reach.lanes[1][first]),
+           jz = simd4::load(&reach.lanes[2][first]);
   for (int i = 0; i < 3; ++i) {
-    const V4 dt = row_times(Rt, i, px, py, pz) - t[9 + i];
+    const V4 dt = simd4::row_times(Rt, i, px, py, pz) - t[9 + i];
     const V4 a = dR[i] * jx, bb = dR[3 + i] * jy, c = dR[6 + i] * jz;
     dj[i] = (i < 2 ? (a + bb) + c : a + (bb + c)) + dt;
   }
   for (int e = 0; e < 9; ++e) s[e] = dR[e] * dR[e];
   const V4 rotation = simd4::sqrt((((s[0] + s[2]) + (s[4] + s[6])) + ((s[1] + s[3]) + (s[5] + s[7]))) + s[8]);
   const V4 joint = simd4::sqrt((dj[0] * dj[0] + dj[1] * dj[1]) + dj[2] * dj[2]);
-  const V4 r{reach.reach[k[0]], reach.reach[k[1]], reach.reach[k[2]], reach.reach[k[3]]};
-  return rotation * r + joint;
+  return rotation * simd4::load(&reach.lanes[3][first]) + joint;  // (-inf for the bones the caller skips)
 }
 
 // bones_within_scalar four bones at a time (the last block: bones 24, 25 and 25 twice).
-__attribute__((target("avx2"))) bool bones_within_avx2(const Mat3& Rt, const Vec3& origin, const std::array<BoneTransform, kHandJointCount>& bones,
+__attribute__((target("avx2"))) bool bones_within_avx2(const Mat3& Rt, const Vec3& origin,
+                                                       const std::array<BoneTransform, kHandJointCount>& bones,
                                                        const BoneTransform* then, const HandReach& reach,
                                                        double limit, double* moves) {
   static_assert(kHandJointCount == 26, "six blocks of four and one of two");
@@ -478,7 +461,7 @@ __attribute__((target("avx2"))) bool bones_within_avx2(const Mat3& Rt, const Vec
                       std::min(first + 3, kHandJointCount - 1)};
     const BoneTransform* const now[4] = {&bones[k[0]], &bones[k[1]], &bones[k[2]], &bones[k[3]]};
     const BoneTransform* const old[4] = {&then[k[0]], &then[k[1]], &then[k[2]], &then[k[3]]};
-    const V4 m = bone_moves(Rt, origin, now, old, reach, k);
+    const V4 m = bone_moves(Rt, origin, now, old, reach, first);
     for (int l = 0; l < 4 && first + l < kHandJointCount; ++l) {
       if (reach.reach[first + l] < 0) continue;  // moves no particle
       moves[first + l] = m[l];

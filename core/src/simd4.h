@@ -10,6 +10,8 @@
 
 #include <cstring>
 
+#include "handsim/hand.h"
+
 namespace handsim::simd4 {
 
 typedef double V4 __attribute__((vector_size(32)));
@@ -38,6 +40,21 @@ HANDSIM_AVX2 void transpose(V4& a, V4& b, V4& c, V4& d) {
   b = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
   c = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
   d = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+}
+
+// Row i of R times the lanes' column (x, y, z), summed as Eigen's fixed-size product sums it: rows 0 and 1
+// from the left (its two-row packets), row 2 from the right (its scalar sum).
+HANDSIM_AVX2 V4 row_times(const Mat3& R, int i, const V4& x, const V4& y, const V4& z) {
+  const V4 a = splat(R(i, 0)) * x, b = splat(R(i, 1)) * y, c = splat(R(i, 2)) * z;
+  return i < 2 ? (a + b) + c : a + (b + c);
+}
+
+// The 12 numbers (column-major) of the bones b[0..3], lane l from b[l].
+HANDSIM_AVX2 void load_bones(const BoneTransform* const* b, V4* m) {
+  for (int c = 0; c < 12; c += 4) {
+    for (int l = 0; l < 4; ++l) m[c + l] = load(b[l]->data() + c);
+    transpose(m[c], m[c + 1], m[c + 2], m[c + 3]);
+  }
 }
 
 }  // namespace handsim::simd4

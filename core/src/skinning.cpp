@@ -346,6 +346,14 @@ void skin_groups(const HandModel& model, const std::array<BoneTransform, kHandJo
   skin_layout_parallel(model.skin, bones, out, threads);
 }
 
+void fill_reach_lanes(HandReach& r) {
+  for (size_t k = 0; k < r.lanes[0].size(); ++k) {
+    const int bone = std::min(int(k), kHandJointCount - 1);
+    for (int d = 0; d < 3; ++d) r.lanes[d][k] = r.bind_joint[bone][d];
+    r.lanes[3][k] = r.reach[bone] < 0 ? -std::numeric_limits<double>::infinity() : r.reach[bone];
+  }
+}
+
 HandReach build_hand_reach(const HandModel& model) {
   HandReach r;
   r.reach.fill(-1.0);
@@ -396,6 +404,7 @@ HandReach build_hand_reach(const HandModel& model) {
     r.span_centre.push_back(centre);
     r.span_radius.push_back(radius * (1 + 1e-12) + 1e-12);
   }
+  fill_reach_lanes(r);
   return r;
 }
 
@@ -417,8 +426,53 @@ void coarse_bounds(const SkinGroup& group, const Vec3& c, double r,
   }
 }
 
+#ifdef HANDSIM_AVX2_KERNELS
+namespace {
+// coarse_particle_bounds_scalar four bones at a time: each lane's centre with the scalar product's bits (Eigen
+// sums rows 0 and 1 of B.leftCols<3>() * j from the left, row 2 from the right), the box the least and most of
+// the lanes' (the same numbers: a minimum does not round; only an exact zero's sign could come from another bone).
+__attribute__((target("avx2"))) void coarse_particle_bounds_avx2(const HandReach& reach,
+                                                                 const std::array<BoneTransform, kHandJointCount>& bones,
+                                                                 Vec3& lo, Vec3& hi) {
+  using simd4::V4;
+  const double inf = std::numeric_limits<double>::infinity();
+  V4 low[3] = {simd4::splat(inf), simd4::splat(inf), simd4::splat(inf)};
+  V4 high[3] = {-low[0], -low[1], -low[2]};
+  for (int first = 0; first < kHandJointCount; first += 4) {
+    const int k[4] = {first, first + 1, std::min(first + 2, kHandJointCount - 1),
+                      std::min(first + 3, kHandJointCount - 1)};
+    const BoneTransform* const b[4] = {&bones[k[0]], &bones[k[1]], &bones[k[2]], &bones[k[3]]};
+    V4 m[12];
+    simd4::load_bones(b, m);
+    const V4 jx = simd4::load(&reach.lanes[0][first]), jy = simd4::load(&reach.lanes[1][first]),
+             jz = simd4::load(&reach.lanes[2][first]);
+    const V4 r = simd4::load(&reach.lanes[3][first]);  // -inf for a bone that moves no particle: its centre - r is
+                                                        // +inf, its centre + r -inf
+    for (int i = 0; i < 3; ++i) {
+      const V4 a = m[i] * jx, bb = m[3 + i] * jy, c = m[6 + i] * jz;
+      const V4 centre = (i < 2 ? (a + bb) + c : a + (bb + c)) + m[9 + i];
+      low[i] = _mm256_min_pd(low[i], centre - r);
+      high[i] = _mm256_max_pd(high[i], centre + r);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    lo[i] = std::min(std::min(low[i][0], low[i][1]), std::min(low[i][2], low[i][3]));
+    hi[i] = std::max(std::max(high[i][0], high[i][1]), std::max(high[i][2], high[i][3]));
+  }
+}
+}  // namespace
+#endif
+
 void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
                             Vec3& lo, Vec3& hi) {
+#ifdef HANDSIM_AVX2_KERNELS
+  if (simd4::has_avx2()) return coarse_particle_bounds_avx2(reach, bones, lo, hi);
+#endif
+  coarse_particle_bounds_scalar(reach, bones, lo, hi);
+}
+
+void coarse_particle_bounds_scalar(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
+                                   Vec3& lo, Vec3& hi) {
   lo.setConstant(std::numeric_limits<double>::infinity());
   hi = -lo;
   for (int k = 0; k < kHandJointCount; ++k) {

@@ -73,10 +73,17 @@ struct HandReach {
   // radius - reach. The box of coarse_particle_bounds grown by it holds every group's coarse box grown by the
   // particle radius.
   double group_excess = 0;
+  // bind_joint's x, y, z and the reach by bone, padded to 28 with bone 25's, for the kernels that load four
+  // bones' at once (simd4.h); the reach is -inf there for a bone that moves no particle. fill_reach_lanes.
+  std::array<std::array<double, 28>, 4> lanes{};
 };
 HandReach build_hand_reach(const HandModel& model);
+void fill_reach_lanes(HandReach& reach);
 void coarse_particle_bounds(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
                             Vec3& lo, Vec3& hi);
+// The same one bone at a time (coarse_particle_bounds: four at a time where the CPU has AVX2, the same box).
+void coarse_particle_bounds_scalar(const HandReach& reach, const std::array<BoneTransform, kHandJointCount>& bones,
+                                   Vec3& lo, Vec3& hi);
 // Grows a box of coarse_particle_bounds to hold every group's coarse box grown by the particle radius
 // (HandReach::group_excess, and a slack for rounding).
 void hold_group_boxes(const HandReach& reach, Vec3& lo, Vec3& hi);

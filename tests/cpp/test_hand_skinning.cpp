@@ -317,6 +317,33 @@ TEST(HandSkinning, BonesAreTheScalarFormulasBitForBit) {
   EXPECT_EQ(compared, 4000);
 }
 
+// The hand's coarse bounds (four bones at a time where the CPU has AVX2) are the one-bone-at-a-time loop's, bit
+// for bit, for random bones near and far from the origin, with the model's reach and with some bones moving no
+// particle (reach < 0).
+TEST(HandSkinning, CoarseBoundsAreTheScalarLoopsBitForBit) {
+  const HandModel m = build_hand_model(HandDef{});
+  HandReach reach = build_hand_reach(m);
+  std::mt19937_64 rng(25);
+  std::normal_distribution<double> gauss(0, 1);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  for (int t = 0; t < 3000; ++t) {
+    std::array<BoneTransform, kHandJointCount> bones;
+    for (BoneTransform& b : bones) {
+      b.leftCols<3>() = Quat(gauss(rng), gauss(rng), gauss(rng), gauss(rng)).normalized().toRotationMatrix();
+      b.col(3) = Vec3(uniform(rng), uniform(rng), uniform(rng)) * (t % 5 == 0 ? 1e4 : 1.0);
+    }
+    HandReach r = reach;
+    if (t % 2)
+      for (double& x : r.reach) x = uniform(rng) < -0.5 ? -1.0 : x;
+    fill_reach_lanes(r);
+    Vec3 lo, hi, lo_scalar, hi_scalar;
+    coarse_particle_bounds(r, bones, lo, hi);
+    coarse_particle_bounds_scalar(r, bones, lo_scalar, hi_scalar);
+    ASSERT_EQ(std::memcmp(lo.data(), lo_scalar.data(), sizeof(Vec3)), 0) << "bones " << t;
+    ASSERT_EQ(std::memcmp(hi.data(), hi_scalar.data(), sizeof(Vec3)), 0) << "bones " << t;
+  }
+}
+
 TEST(HandSkinning, SuppliedMeshIsValidatedAndUsable) {
   HandFrame bind = bind_frame(Handedness::Right);
   SkinnedMesh mesh = make_hand_mesh(bind, 3000);
