@@ -3,6 +3,7 @@
 // the palm pose. Dimensions are those of an adult hand at scale 1.
 #include "handsim/hand.h"
 
+#include "simd4.h"
 #include "validate.h"
 
 #include <algorithm>
@@ -234,11 +235,51 @@ bool joint_is_good(const JointPose& jp) {
 
 }  // namespace
 
-bool frame_is_valid(const HandFrame& frame) {
-  if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right) return false;
+bool joints_are_good(const HandFrame& frame) {
   for (const JointPose& jp : frame.joints)
     if (jp.valid && !joint_is_good(jp)) return false;
   return true;
+}
+
+#ifdef HANDSIM_AVX2_KERNELS
+// Whether every valid joint is good (joint_is_good) four joints at a time: each lane the same comparisons of the
+// same numbers (the quaternion's norm as Eigen's, sqrt((x x + z z) + (y y + w w)); |a| <= b as -b <= a <= b,
+// false alike for a NaN), so the same answer.
+namespace {
+__attribute__((target("avx2"))) bool joints_are_good_avx2(const HandFrame& frame) {
+  using simd4::V4;
+  typedef long long Mask __attribute__((vector_size(32)));
+  const auto& J = frame.joints;
+  constexpr double far = validate::kMaxCoordinate;
+  Mask bad = Mask{0, 0, 0, 0};
+  for (int first = 0; first < kHandJointCount; first += 4) {
+    const int k[4] = {first, first + 1, std::min(first + 2, kHandJointCount - 1),
+                      std::min(first + 3, kHandJointCount - 1)};
+    V4 x = simd4::load(J[k[0]].orientation.coeffs().data()), y = simd4::load(J[k[1]].orientation.coeffs().data()),
+       z = simd4::load(J[k[2]].orientation.coeffs().data()), w = simd4::load(J[k[3]].orientation.coeffs().data());
+    simd4::transpose(x, y, z, w);
+    V4 px = simd4::load(J[k[0]].position.data()), py = simd4::load(J[k[1]].position.data()),
+       pz = simd4::load(J[k[2]].position.data()), unused = simd4::load(J[k[3]].position.data());
+    simd4::transpose(px, py, pz, unused);
+    const V4 r{J[k[0]].radius, J[k[1]].radius, J[k[2]].radius, J[k[3]].radius};
+    const Mask valid{-J[k[0]].valid, -J[k[1]].valid, -J[k[2]].valid, -J[k[3]].valid};
+    const V4 d = simd4::sqrt((x * x + z * z) + (y * y + w * w)) - 1.0;
+    const Mask good = (-far <= px) & (px <= far) & (-far <= py) & (py <= far) & (-far <= pz) & (pz <= far) &
+                      (-validate::kQuatTolerance <= d) & (d <= validate::kQuatTolerance) & (r >= 0) &
+                      (r <= kMaxJointRadius);
+    bad |= valid & ~good;
+  }
+  return (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
+}
+}  // namespace
+#endif
+
+bool frame_is_valid(const HandFrame& frame) {
+  if (frame.handedness != Handedness::Left && frame.handedness != Handedness::Right) return false;
+#ifdef HANDSIM_AVX2_KERNELS
+  if (simd4::has_avx2()) return joints_are_good_avx2(frame);
+#endif
+  return joints_are_good(frame);
 }
 
 void validate_frame(const HandFrame& frame, const std::string& argument) {

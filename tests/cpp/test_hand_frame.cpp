@@ -1,9 +1,12 @@
 // Synthetic hand frames: anatomy, mirror symmetry, pinch and fist, frame validation.
 #include "handsim/hand.h"
+#include "world_impl.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <random>
 
 using namespace handsim;
 
@@ -185,4 +188,41 @@ TEST(HandFrame, ValidateFrameRejectsBadValidJoints) {
   f.joints[9].orientation.coeffs().setConstant(std::nan(""));
   f.joints[9].radius = -5;
   EXPECT_NO_THROW(validate_frame(f, "frame"));
+}
+
+// The step's frame check (four joints at a time where the CPU has AVX2) gives the one-joint-at-a-time answer on
+// joints at and around every bound: coordinates near +-1e7 m, quaternion norms near 1 +- 1e-3, radii near 0 and
+// the largest, NaN and infinities, valid and not.
+TEST(HandFrame, TheStepsFrameCheckIsTheScalarOnesAnswer) {
+  std::mt19937_64 rng(25);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  std::uniform_int_distribution<int> pick(0, 9);
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::nan("");
+  auto near = [&](double x) {  // x, or a few ulps either side of it
+    for (int n = pick(rng) - 5; n != 0; n += n > 0 ? -1 : 1) x = std::nextafter(x, n > 0 ? inf : -inf);
+    return x;
+  };
+  int valid = 0, invalid = 0;
+  for (int t = 0; t < 20000; ++t) {
+    HandFrame f = make_hand_frame(t % 2 ? Handedness::Left : Handedness::Right, some_pose(), HandPoseParams{});
+    const int bad_joints = pick(rng) % 3;
+    for (int b = 0; b < bad_joints; ++b) {
+      JointPose& jp = f.joints[size_t(pick(rng) * 2 + pick(rng) % 2 + (pick(rng) > 5 ? 6 : 0)) % kHandJointCount];
+      switch (pick(rng)) {
+        case 0: jp.position[pick(rng) % 3] = near(pick(rng) % 2 ? 1e7 : -1e7); break;
+        case 1: jp.orientation.coeffs() *= near(1 + (pick(rng) % 2 ? 1e-3 : -1e-3)); break;
+        case 2: jp.radius = near(pick(rng) % 2 ? 0.0 : 1e7); break;
+        case 3: jp.position[pick(rng) % 3] = pick(rng) % 2 ? nan : -inf; break;
+        case 4: jp.orientation.coeffs()[pick(rng) % 4] = pick(rng) % 2 ? nan : inf; break;
+        case 5: jp.radius = nan; break;
+        case 6: jp.valid = false; jp.position.x() = nan; break;
+        default: jp.orientation.coeffs() *= 1 + 2e-3 * uniform(rng); break;
+      }
+    }
+    const bool scalar = joints_are_good(f);
+    ASSERT_EQ(frame_is_valid(f), scalar) << "frame " << t;
+    ++(scalar ? valid : invalid);
+  }
+  EXPECT_GT(valid, 5000);
+  EXPECT_GT(invalid, 3000);
 }
