@@ -196,9 +196,11 @@ std::vector<HandFrame> to_frames(py::handle hands) {
 // "hands[HandId(index=0, generation=1)]: expected a HandFrame, got int".
 std::string key_name(HandId id) { return "hands[" + id_repr("HandId", id.index, id.generation) + "]"; }
 
-// Fills `inputs` (the caller's, kept from step to step so a step allocates none) from the dict.
+// Fills `inputs` (the caller's, kept from step to step so a step allocates none) from the dict. Its entries are
+// overwritten, not cleared and pushed again: a pushed entry is a HandInput made and then copied into the vector,
+// two copies of the frame's 2 kB where an assignment makes one.
 void to_inputs(const py::dict& hands, std::vector<HandInput>& inputs) {
-  inputs.clear();
+  size_t count = 0;
   // The two types looked up once for the module, a caster's load without conversions as the isinstance test
   // (it keeps the value), and the key's name only for a message: per entry of every step, an isinstance then a
   // cast looked each type up twice, and building the name cost more than both.
@@ -210,9 +212,15 @@ void to_inputs(const py::dict& hands, std::vector<HandInput>& inputs) {
       throw py::type_error("hands: key " + std::string(py::repr(key)) + " (" +
                            std::string(py::str(py::type::of(key).attr("__name__"))) + ") is not a HandId");
     const HandId id = *static_cast<const HandId*>(key_caster.value);
-    inputs.push_back({id, frame_caster.load(frame, false) ? *static_cast<const HandFrame*>(frame_caster.value)
-                                                          : cast_arg<HandFrame>(frame, key_name(id))});
+    if (inputs.size() == count) inputs.emplace_back();
+    HandInput& input = inputs[count++];
+    input.hand = id;
+    if (frame_caster.load(frame, false))  // (not a ?: of the two, which would copy the frame into a temporary)
+      input.frame = *static_cast<const HandFrame*>(frame_caster.value);
+    else
+      input.frame = cast_arg<HandFrame>(frame, key_name(id));
   }
+  inputs.resize(count);
 }
 
 // The core names an entry by its position, "hands[k].hand" or "hands[k].frame.<field>"; a dict has no

@@ -354,7 +354,7 @@ double centred_times(int n, const TimeOf& time_of, const Add& add) {
 // Squeeze: the hand's articulation carrying an opposing pair into the body
 
 void ArticulationHistory::push(const Bones& bones, double time, double window) {
-  samples_.push(Sample{bones, time}, window);
+  samples_.push_made(time, window, [&](Sample& s) { s.bones = bones; });
 }
 
 bool ArticulationHistory::in_time_order() const { return samples_.in_time_order(); }
