@@ -113,9 +113,19 @@ struct JointSlotState {
   }
 };
 
+// Not state: a hinge child's last pose and what it was made from (hinge_pose, world_joints.cpp). A held lid is
+// placed from the same joint value and parent several times a step (the pose fit, the first substep, the solve's
+// start, its placement), each a sine and cosine and two quaternion products the same as the last.
+struct HingePoseMemo {
+  bool set = false;
+  std::array<double, 21> key{};  // the parent pose, the angle and the frame's pivots, axis and rest, bit for bit
+  Pose child;
+};
+
 struct Joint : JointSlotModel, JointSlotState {
   uint32_t generation = 0;
   bool alive = false;
+  mutable HingePoseMemo hinge_memo;  // read and written under the world's lock, as every joint is
 };
 
 // A hand's model: its definition and what is built from it once.

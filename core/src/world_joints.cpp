@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <type_traits>
 
@@ -122,10 +123,34 @@ Pose parent_pose(const std::vector<Body>& bodies, const Joint& j) {
   return j.parent == kWorldParent ? Pose() : bodies[j.parent].pose;
 }
 
+namespace {
+// hinge_child_pose(j.hinge, parent, theta), made again only when one of the numbers it reads differs in a bit
+// from the last call's (HingePoseMemo): a pure function of them, so the same pose.
+Pose hinge_pose(const Joint& j, const Pose& parent, double theta) {
+  std::array<double, 21> key;
+  double* k = key.data();
+  auto put = [&k](const double* x, int n) { k = std::copy(x, x + n, k); };
+  put(parent.position.data(), 3);
+  put(parent.orientation.coeffs().data(), 4);
+  put(&theta, 1);
+  put(j.hinge.pivot_parent.data(), 3);
+  put(j.hinge.axis_parent.data(), 3);
+  put(j.hinge.pivot_child.data(), 3);
+  put(j.hinge.rest.coeffs().data(), 4);
+  HingePoseMemo& memo = j.hinge_memo;
+  if (!memo.set || std::memcmp(key.data(), memo.key.data(), sizeof key) != 0) {
+    memo.child = hinge_child_pose(j.hinge, parent, theta);
+    memo.key = key;
+    memo.set = true;
+  }
+  return memo.child;
+}
+}  // namespace
+
 Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j) {
   const Pose p = parent_pose(bodies, j);
   switch (j.type) {
-    case JointType::Hinge: return hinge_child_pose(j.hinge, p, j.value);
+    case JointType::Hinge: return hinge_pose(j, p, j.value);
     case JointType::Slider: return slider_child_pose(j.slider, p, j.value);
     case JointType::Ball: return ball_child_pose(j.ball, p, j.rotation);
     case JointType::Fixed: return fixed_child_pose(j.fixed, p);
@@ -136,7 +161,7 @@ Pose joint_child_pose(const std::vector<Body>& bodies, const Joint& j) {
 namespace {
 // Where a hinge's or slider's child is at its coordinate `value` (an angle or an offset) on the parent pose `parent`.
 Pose coordinate_child_pose(const Joint& j, const Pose& parent, double value) {
-  return j.type == JointType::Hinge ? hinge_child_pose(j.hinge, parent, value) : slider_child_pose(j.slider, parent, value);
+  return j.type == JointType::Hinge ? hinge_pose(j, parent, value) : slider_child_pose(j.slider, parent, value);
 }
 }  // namespace
 
@@ -323,7 +348,7 @@ void integrate_joints(const WorldModel& model, std::vector<Joint>& joints, const
       const double before = j.value;
       j.value += h * j.rate;
       clamp_coordinate(j.value, j.rate, j.hinge.lower, j.hinge.upper);
-      if (stopped_by_parent(bodies, j, now, hinge_child_pose(j.hinge, p, j.value))) j.value = before, j.rate = 0;
+      if (stopped_by_parent(bodies, j, now, hinge_pose(j, p, j.value))) j.value = before, j.rate = 0;
     } else if (j.type == JointType::Slider) {
       const Vec3 a = p.orientation * j.slider.axis;
       j.rate = implicit_damped(j.rate, h * g.dot(a), h * j.damping / m);

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 using namespace handsim;
@@ -839,4 +840,37 @@ TEST(JointsWorld, LidLetGoAtItsStopStaysThereUntilTheHandPushesIt) {
   double pushed = 0;
   for (int i = 1; i <= 20; ++i) pushed = step(goal - 15 * kDeg * i / 20, open_grip(lid_pinch_shape(), 1.0));
   EXPECT_LT(pushed, 83.7 * kDeg);  // past its balance point: it falls shut
+}
+
+// A hinge child's pose is remembered (HingePoseMemo) and made again when any number it reads changes in a bit: after
+// each random change of the parent's pose, the angle (+0 and -0 included) or the hinge frame, joint_child_pose is
+// hinge_child_pose's pose to the bit; unchanged, it is too.
+TEST(JointsWorld, TheRememberedHingeChildPoseIsTheFormulasToTheBit) {
+  std::mt19937_64 rng(25);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  std::uniform_int_distribution<int> pick(0, 6);
+  auto unit = [&] { return Quat(uniform(rng), uniform(rng), uniform(rng), uniform(rng)).normalized(); };
+  std::vector<Body> bodies(2);
+  Joint j;
+  j.type = JointType::Hinge;
+  j.parent = 0;
+  j.child = 1;
+  j.hinge.axis_parent = Vec3(0, 0, 1);
+  for (int t = 0; t < 5000; ++t) {
+    switch (pick(rng)) {
+      case 0: bodies[0].pose.position[t % 3] = uniform(rng); break;
+      case 1: bodies[0].pose.orientation = unit(); break;
+      case 2: j.value = t % 4 == 0 ? 0.0 : t % 4 == 1 ? -0.0 : uniform(rng); break;
+      case 3: j.hinge.pivot_parent[t % 3] = uniform(rng); break;
+      case 4: j.hinge.axis_parent = Vec3(uniform(rng), uniform(rng), uniform(rng)).normalized(); break;
+      case 5: j.hinge.pivot_child[t % 3] = uniform(rng); break;
+      default: j.hinge.rest = unit(); break;  // (or nothing changed since the last call, every other time)
+    }
+    for (int again = 0; again < 2; ++again) {
+      const Pose memo = joint_child_pose(bodies, j), made = hinge_child_pose(j.hinge, bodies[0].pose, j.value);
+      ASSERT_EQ(std::memcmp(memo.position.data(), made.position.data(), sizeof(Vec3)), 0) << "change " << t;
+      ASSERT_EQ(std::memcmp(memo.orientation.coeffs().data(), made.orientation.coeffs().data(), sizeof(Quat)), 0)
+          << "change " << t;
+    }
+  }
 }
