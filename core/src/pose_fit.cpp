@@ -507,8 +507,9 @@ StageReport fit_touched_bodies(const WorldModel& model, std::vector<Body>& bodie
   touched.clear();
   for (auto& entry : pairs)
     if (!entry.second.contacts.empty()) touched.push_back({entry.first.second, &entry});
-  std::stable_sort(touched.begin(), touched.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  if (touched.size() > 1)  // (a list of one is sorted, and stable_sort would allocate its buffer for it)
+    std::stable_sort(touched.begin(), touched.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
   for (size_t t = 0; t < touched.size();) {
     const uint32_t bi = touched[t].first;
     size_t end = t;

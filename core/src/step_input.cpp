@@ -31,9 +31,10 @@ bool fits(const HandFrame& frame, const HandSlot& h) {
 
 }  // namespace
 
-SlotFrames World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
+const SlotFrames& World::Impl::frames_by_id(double dt, const std::vector<HandInput>& inputs) const {
   validate_dt(dt);
-  SlotFrames frames(hands.size(), nullptr);
+  SlotFrames& frames = frames_by_id_scratch;
+  frames.assign(hands.size(), nullptr);
   for (size_t k = 0; k < inputs.size(); ++k) {
     // The entry's name is built only for a message: a good entry (every entry of every step, normally) costs
     // no allocation.

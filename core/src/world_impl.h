@@ -476,7 +476,10 @@ struct World::Impl : WorldModel, WorldState, BodyBoxes, MovingBodies {
   // Step input checks (step_input.cpp): everything is checked before anything changes.
   void validate_dt(double dt) const;
   void validate_hand_frame(const HandFrame& frame, const HandSlot& h, const std::string& argument) const;
-  SlotFrames frames_by_id(double dt, const std::vector<HandInput>& inputs) const;
+  // The step's frames by hand slot, in frames_by_id_scratch (kept so that a step allocates none; used under the
+  // world's lock, by the step it is made for).
+  const SlotFrames& frames_by_id(double dt, const std::vector<HandInput>& inputs) const;
+  mutable SlotFrames frames_by_id_scratch;
   SlotFrames frames_by_position(double dt, const std::vector<HandFrame>& list) const;  // deprecated overload
 
   // Save and restore (world_state.cpp).
