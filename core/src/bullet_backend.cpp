@@ -116,6 +116,7 @@ struct BulletBackend::Impl {
   Entry ground;
   bool woken = true;                 // see BulletBackend::woken
   std::vector<int> moved_kinematic;  // kinematic bodies moved since the last step or idle
+  std::vector<int> resaved;          // those the idle after the coming one saves again (resave_at_next_idle)
   uint64_t era = 0;  // counts Bullet's steps and restores, which change every body: a save of an older era is stale
 
   explicit Impl(const WorldDef& def) {
@@ -380,6 +381,8 @@ void BulletBackend::move_kinematic(int handle, const Pose& pose) {
 
 void BulletBackend::keep_kinematic(int handle) { impl_->moved_kinematic.push_back(handle); }
 
+void BulletBackend::resave_at_next_idle(int handle) { impl_->resaved.push_back(handle); }
+
 void BulletBackend::read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const {
   const btRigidBody& body = *impl_->entries[handle].body;
   pose = from_bt(body.getWorldTransform());
@@ -397,21 +400,34 @@ void BulletBackend::step(double h) {
   ++impl_->era;
   impl_->woken = false;
   impl_->moved_kinematic.clear();
+  impl_->resaved.clear();
 }
 
 void BulletBackend::idle(double h) {
   // What stepSimulation does first for every kinematic body (saveKinematicState): its velocity over the
   // substep and the transform the next one starts from. Unmoved kinematic bodies keep zero velocity.
   std::vector<int>& moved = impl_->moved_kinematic;
-  std::sort(moved.begin(), moved.end());
-  moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  if (moved.size() > 1) {  // (a list of one, a held lid's, is both already)
+    std::sort(moved.begin(), moved.end());
+    moved.erase(std::unique(moved.begin(), moved.end()), moved.end());
+  }
+  const std::vector<int>& resaved = impl_->resaved;
   for (int handle : moved) {
     Impl::Entry& e = impl_->entries[handle];
-    if (e.body && e.body->isKinematicObject()) impl_->save_kinematic(e, h);
+    if (!e.body || !e.body->isKinematicObject()) continue;
+    if (std::find(resaved.begin(), resaved.end(), handle) == resaved.end()) {
+      impl_->save_kinematic(e, h);
+    } else {
+      // What saveKinematicState leaves that the next save reads: the transform it starts from. Its velocities
+      // the next save writes again. Not saved unmoved, so the next save is made.
+      e.body->setInterpolationWorldTransform(e.body->getWorldTransform());
+      e.saved_unmoved = false;
+    }
   }
   // A kinematic body that did not move keeps its transform as the next start: nothing to save for it (its
   // velocity is recomputed by the next real step, which starts with the same save).
   moved.clear();
+  impl_->resaved.clear();
 }
 
 namespace {

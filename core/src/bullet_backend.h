@@ -51,6 +51,11 @@ class BulletBackend {
   // move_kinematic to the pose the last one gave, which nothing has changed since (no step, write or restore):
   // the same for Bullet, without converting the pose again, and idle may skip its unchanged save.
   void keep_kinematic(int handle);
+  // The coming idle's save of this kinematic body (its velocity over the substep, saveKinematicState) is made
+  // again by the idle after it, and nothing between reads what the first writes (no step, write or read of it;
+  // the body moved or kept before the second): the second overwrites the first's velocities and starts from the
+  // transform the first leaves, so the coming idle only sets that transform. For the coming idle only.
+  void resave_at_next_idle(int handle);
   void read(int handle, Pose& pose, Vec3& linear, Vec3& angular) const;
   // Whether Bullet still simulates a dynamic body; false once it has fallen asleep (at rest for Bullet's
   // deactivation time), until something wakes it (a write, a contact with a moving body).

@@ -31,6 +31,10 @@ void substep(const WorldModel& model, WorldState& state, std::vector<Body>& bodi
     backend.step(h);
     read_dynamic_bodies(state, bodies, backend, dynamic, boxes);
   } else {
+    // With the children placed at this substep and kept at the next (`placed`), the next idle saves each of them
+    // again before anything reads Bullet's copy: this one's save of them would be overwritten (a held lid, moved
+    // by the last frame's joint solve, saved twice a frame).
+    if (placed && i == 0 && n > 1) resave_children(model, joints, bodies, backend);
     backend.idle(h);
     ++state.idle_substeps;
   }

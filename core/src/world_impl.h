@@ -519,6 +519,10 @@ void place_children(const WorldModel& model, const std::vector<Joint>& joints, s
 // they stay there (keep_kinematic), which is what setting them again would tell it.
 void replace_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
                       BulletBackend& backend);
+// Tells Bullet that the idle after the coming one saves every hard child again (resave_at_next_idle): an idle
+// substep that places the children is followed by one that keeps them (simulate's `placed`).
+void resave_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
+                     BulletBackend& backend);
 // Whether integrate_joints moves the hard joint `j` (its child not held, the joint not fixed), and any hard joint.
 bool integrates(const Joint& j, const Body& child);
 bool joints_integrate(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies);

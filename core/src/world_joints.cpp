@@ -308,6 +308,11 @@ void replace_children(const WorldModel& model, const std::vector<Joint>& joints,
   for (uint32_t k : model.joint_order) backend.keep_kinematic(bodies[joints[k].child].backend);
 }
 
+void resave_children(const WorldModel& model, const std::vector<Joint>& joints, const std::vector<Body>& bodies,
+                     BulletBackend& backend) {
+  for (uint32_t k : model.joint_order) backend.resave_at_next_idle(bodies[joints[k].child].backend);
+}
+
 // --- free dynamics of hard joints (one substep) ---
 
 namespace {
