@@ -293,7 +293,7 @@ double GripHistory::span() const { return samples_.empty() ? 0.0 : sum_of(sample
 double GripHistory::closed_by(unsigned terms) const {
   if (samples_.empty() || terms == 0) return 0.0;
   double widest = 0;
-  for (const Sample& s : samples_) widest = std::max(widest, sum_of(s.terms, terms));
+  samples_.for_each([&](const Sample& s) { widest = std::max(widest, sum_of(s.terms, terms)); });
   return widest - sum_of(samples_.back().terms, terms);
 }
 
@@ -354,7 +354,12 @@ double centred_times(int n, const TimeOf& time_of, const Add& add) {
 // Squeeze: the hand's articulation carrying an opposing pair into the body
 
 void ArticulationHistory::push(const Bones& bones, double time, double window) {
-  samples_.push_made(time, window, [&](Sample& s) { s.bones = bones; });
+  // The bones as the 312 doubles they are stored as, which the compiler copies as a block (Eigen's assignment of
+  // 26 fixed matrices copied them one double at a time).
+  static_assert(sizeof(Bones) == kHandJointCount * 12 * sizeof(double));
+  samples_.push_made(time, window, [&bones](Sample& s) {
+    std::copy_n(bones.front().data(), kHandJointCount * 12, s.bones.front().data());
+  });
 }
 
 bool ArticulationHistory::in_time_order() const { return samples_.in_time_order(); }

@@ -9,6 +9,7 @@
 #include "pose_fit.h"
 #include "validate.h"
 
+#include <algorithm>
 #include <array>
 #include <type_traits>
 #include <utility>
@@ -144,39 +145,39 @@ unsigned touching_terms(const HandModel& model, const std::vector<ParticleContac
 double hand_length(const HandModel& model);
 
 // Samples with a .time, oldest first, kept for the last `window` seconds (the newest is always kept): the grip and
-// articulation histories share this. Dropped samples stay at the front of the storage until they are half of it
-// and then go in one move, so a push moves one sample on average instead of every sample of the window (at 60 Hz
-// a 0.5 s window holds 31; an articulation sample is 26 bones, 2.5 kB).
+// articulation histories share this. A ring: a push writes into the slot of the oldest sample dropped, so it copies
+// the new sample once and moves none of the others (at 60 Hz a 0.5 s window holds 31; an articulation sample is 26
+// bones, 2.5 kB, and the vector with its dropped samples in front moved one sample a push on average).
 template <class Sample>
 class SampleWindow {
  public:
   // Throws handsim::Error naming "time" unless times strictly increase.
   void push(Sample sample, double window) {
-    check_next(sample.time);
-    const double time = sample.time;
-    items_.push_back(std::move(sample));
-    drop_old(time, window);
+    push_made(sample.time, window, [&sample](Sample& slot) { slot = std::move(sample); });
   }
-  // push(Sample{..., time}) with the sample written in place by fill(Sample&) (time set after), not made and then
-  // copied in: an articulation sample is 2.5 kB.
-  template <class Fill>
-  void push_made(double time, double window, Fill&& fill) {
+  // push of the sample `fill(Sample&)` writes in its slot, at `time` (no copy of a whole sample made first).
+  template <class Fill> void push_made(double time, double window, Fill&& fill) {
     check_next(time);
-    items_.emplace_back();
-    fill(items_.back());
-    items_.back().time = time;
-    drop_old(time, window);
+    Sample& slot = next_slot();
+    fill(slot);
+    slot.time = time;
+    ++size_;
+    while (size_ > 1 && (*this)[0].time < time - window - 1e-9) drop_oldest();
   }
   void clear() {
     items_.clear();
-    first_ = 0;
+    first_ = size_ = 0;
   }
-  bool empty() const { return first_ == items_.size(); }
-  size_t size() const { return items_.size() - first_; }
-  const Sample& operator[](size_t k) const { return items_[first_ + k]; }  // 0: the oldest
-  const Sample& back() const { return items_.back(); }
-  const Sample* begin() const { return items_.data() + first_; }
-  const Sample* end() const { return items_.data() + items_.size(); }
+  bool empty() const { return size_ == 0; }
+  size_t size() const { return size_; }
+  const Sample& operator[](size_t k) const { return items_[slot_of(k)]; }  // 0: the oldest
+  const Sample& back() const { return (*this)[size_ - 1]; }
+  // f(sample) for each sample held, oldest first: the ring's two runs, without a slot computed per sample.
+  template <class F> void for_each(F&& f) const {
+    const size_t run = std::min(size_, items_.size() - first_);
+    for (size_t i = first_; i < first_ + run; ++i) f(items_[i]);
+    for (size_t i = 0; i < size_ - run; ++i) f(items_[i]);
+  }
   // Strictly increasing times, as push keeps them (a restored state is checked).
   bool in_time_order() const {
     for (size_t k = 1; k < size(); ++k)
@@ -188,10 +189,14 @@ class SampleWindow {
   template <class Visitor, class Self, class F>
   static void visit_state(Self& w, Visitor& v, F f) {
     if constexpr (std::is_const_v<Self>) {
-      v.list(std::vector<Sample>(w.begin(), w.end()), f);
+      std::vector<Sample> held;
+      held.reserve(w.size());
+      for (size_t k = 0; k < w.size(); ++k) held.push_back(w[k]);
+      v.list(held, f);
     } else {
-      w.compact();
+      w.linearize();
       v.list(w.items_, f);
+      w.size_ = w.items_.size();
     }
   }
 
@@ -201,16 +206,29 @@ class SampleWindow {
     if (!empty() && !(time > back().time))
       validate::fail("time", "must increase, got " + validate::fmt(time) + " after " + validate::fmt(back().time));
   }
-  void drop_old(double time, double window) {
-    while (first_ + 1 < items_.size() && items_[first_].time < time - window - 1e-9) ++first_;
-    if (2 * first_ >= items_.size()) compact();
+  // The slot of the k-th oldest sample held.
+  size_t slot_of(size_t k) const {
+    const size_t i = first_ + k;
+    return i < items_.size() ? i : i - items_.size();
   }
-  void compact() {
-    items_.erase(items_.begin(), items_.begin() + std::ptrdiff_t(first_));
+  // The slot after the newest: a dropped sample's, else a new one (the ring grows, rarely: to the most it held).
+  Sample& next_slot() {
+    if (size_ < items_.size()) return items_[slot_of(size_)];
+    linearize();
+    return items_.emplace_back();
+  }
+  void drop_oldest() {
+    first_ = slot_of(1);
+    --size_;
+  }
+  // The samples held at items_[0, size_), oldest first, and no other slot.
+  void linearize() {
+    std::rotate(items_.begin(), items_.begin() + std::ptrdiff_t(first_), items_.end());
+    items_.resize(size_);
     first_ = 0;
   }
-  std::vector<Sample> items_;  // items_[first_..] are the samples held
-  size_t first_ = 0;
+  std::vector<Sample> items_;  // the ring: size_ samples from items_[first_] on, wrapping at the end
+  size_t first_ = 0, size_ = 0;
 };
 
 // A hand's bone transforms (skinning's B_j) over the last `window` seconds, for GraspSettings::squeeze_distance:

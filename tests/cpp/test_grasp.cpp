@@ -710,3 +710,57 @@ TEST(GripSpan, PinchReachCountsTheThumbOnlyNearTheIndex) {
   EXPECT_NEAR(span(0, 0.04) - span(0.2, 0.04), 0.0, 1e-12);
   EXPECT_GT(span(0.4, 0.04) - span(1.0, 0.04), 0.02);
 }
+
+namespace {
+struct TimedSample {
+  double time = 0;
+  int id = 0;
+};
+// Hands SampleWindow::visit_state's list over, as save (a copy) and restore (the window's own storage) see it.
+struct ListVisitor {
+  std::vector<int> ids;
+  template <class List, class F> void list(List& samples, F) {
+    ids.clear();
+    for (const TimedSample& s : samples) ids.push_back(s.id);
+  }
+};
+}  // namespace
+
+// The ring holds what a list that drops its samples older than the window from the front holds, oldest first,
+// through windows that shrink and grow (the ring grows and wraps), saves and restores, and pushes of both kinds.
+TEST(SampleWindow, HoldsWhatAListDroppingTheOldSamplesHolds) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> gap(0.001, 0.03), window(0.0, 0.5);
+  SampleWindow<TimedSample> ring;
+  std::vector<TimedSample> list;
+  double time = 0;
+  for (int i = 0; i < 5000; ++i) {
+    time += gap(rng);
+    const double w = i % 700 < 350 ? window(rng) : 0.5;  // long runs of a full window, then short ones
+    if (i % 2) {
+      ring.push(TimedSample{time, i}, w);
+    } else {
+      ring.push_made(time, w, [i](TimedSample& s) { s.id = i; });
+    }
+    list.push_back({time, i});
+    while (list.size() > 1 && list.front().time < time - w - 1e-9) list.erase(list.begin());
+    ASSERT_EQ(ring.size(), list.size()) << i;
+    std::vector<int> seen;
+    ring.for_each([&](const TimedSample& s) { seen.push_back(s.id); });
+    for (size_t k = 0; k < list.size(); ++k) {
+      ASSERT_EQ(ring[k].id, list[k].id) << i;
+      ASSERT_EQ(seen[k], list[k].id) << i;
+    }
+    ASSERT_EQ(ring.back().id, i);
+    if (i % 97 == 0) {
+      ListVisitor saved, restored;
+      SampleWindow<TimedSample>::visit_state(std::as_const(ring), saved, 0);
+      SampleWindow<TimedSample>::visit_state(ring, restored, 0);
+      ASSERT_EQ(saved.ids, restored.ids) << i;
+      ASSERT_EQ(saved.ids.size(), list.size()) << i;
+      for (size_t k = 0; k < list.size(); ++k) ASSERT_EQ(saved.ids[k], list[k].id) << i;
+    }
+  }
+  EXPECT_THROW(ring.push(TimedSample{time, -1}, 0.5), Error) << "times must increase";
+  EXPECT_EQ(ring.back().id, 4999) << "a refused push leaves the window as it was";
+}
