@@ -542,10 +542,13 @@ bool witness_opposes(const HandBodyPair& pair, double cos);
 // window. A digit squeezes a body only by closing onto it; digits closing elsewhere press nothing. Two palms
 // clapping on a box (Leap recording three-claps) flex the fingers a little and bring the thumb towards the index:
 // the whole span closes 15-33 mm, the digits on the box (the little finger, the ring finger) 2-6 mm. A held body
-// (not a begin) needs no closing.
+// (not a begin) needs no closing: its tracker (GraspTracker::update_grasped) reads none, and only its own update
+// changes whether it holds, so the window is not scanned for it (closed_by: 31 samples at 60 Hz, every frame of
+// a hold) and the answer is "met".
 bool closes_on(const WorldDef& def, const HandSlot& h, const HandBodyPair& pair, bool begin) {
   const double needed = closing_needed(def);
-  if (!begin || needed <= 0) return h.grip.closed_by() >= needed;
+  if (!begin) return true;
+  if (needed <= 0) return h.grip.closed_by() >= needed;
   return h.grip.closed_by(touching_terms(*h.model, pair.contacts)) >= needed;
 }
 

@@ -484,6 +484,35 @@ TEST(GraspTracker, ClosingBeginsAndOpeningEnds) {
   EXPECT_EQ(e.reason, ReleaseReason::Released);
 }
 
+// A held pair's closing is not read (decide_grasps's closes_on skips the window's scan while the pair holds): a
+// grasped tracker fed the same frames with closing true and false answers alike, frame by frame, to the release.
+TEST(GraspTracker, HeldReadsNoClosing) {
+  GraspSettings s;
+  s.closing_distance = 0.015;
+  s.opening_distance = 0.025;
+  std::mt19937 rng(25);
+  for (int trial = 0; trial < 200; ++trial) {
+    GraspTracker with(s);
+    GraspInput begin = frame(true, 8);
+    while (!with.grasped()) with.update(begin);
+    GraspTracker without = with;
+    for (int i = 0; i < 200 && with.grasped(); ++i) {
+      GraspInput in = frame(rng() % 8 != 0, int(rng() % 4));
+      in.hand_tracked = rng() % 16 != 0;
+      in.span = 0.4 + 0.001 * double(rng() % 40);
+      in.closing = true;
+      const GraspEvent a = with.update(in);
+      in.closing = false;
+      const GraspEvent b = without.update(in);
+      ASSERT_EQ(a.type, b.type) << trial << " " << i;
+      ASSERT_EQ(a.reason, b.reason);
+      ASSERT_EQ(a.zero_velocity, b.zero_velocity);
+      ASSERT_EQ(with.grasped(), without.grasped());
+      ASSERT_EQ(with.untracked_time(), without.untracked_time());
+    }
+  }
+}
+
 // GripHistory: how much the span shrank within the window, and how far two hands' palms approached.
 TEST(GripHistory, ClosedByAndApproachedByWithinTheWindow) {
   GripHistory a, b;
