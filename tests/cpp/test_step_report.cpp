@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 using namespace handsim;
@@ -101,4 +102,25 @@ TEST(StepReport, JointSolvedIsClearedTheFrameAfterTheHandLeaves) {
   EXPECT_EQ(after.cost, 0.0);
   EXPECT_EQ(after.iterations, 0);
   EXPECT_EQ(after.solve_seconds, 0.0);
+}
+
+// A stage's seconds run from the end of the stage before (one clock read a stage): every stage's are positive, and
+// together they take no more than the step did as its caller timed it, frame after frame of a lid pinched and lifted.
+TEST(StepReport, TheStagesSecondsAreSuccessiveSpansOfTheStep) {
+  World w{WorldDef{}};
+  const JewelryBox box = build_jewelry_box(w);
+  const HandId hand = w.add_hand(HandDef{});
+  for (int i = 0; i < 60; ++i) {
+    const Pose palm = box.lid_pinch_palm(w, Handedness::Right, 0.005 * i);
+    const HandFrame frame = make_hand_frame(Handedness::Right, palm, closing_grip(lid_pinch_shape(), i * kDt));
+    const auto t0 = std::chrono::steady_clock::now();
+    const StepReport r = w.step(kDt, {{hand, frame}});
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    double sum = 0;
+    for (const StageReport& s : r.stages) {
+      EXPECT_GT(s.seconds, 0.0) << s.name() << " at frame " << i;
+      sum += s.seconds;
+    }
+    EXPECT_LE(sum, wall) << "frame " << i;
+  }
 }
