@@ -233,9 +233,22 @@ double capsule_gap(const Vec3& a0, const Vec3& a1, double ra0, double ra1, const
   return (w + s * u - t * v).norm() - (ra0 + s * (ra1 - ra0)) - (rb0 + t * (rb1 - rb0));
 }
 
+GripBind grip_bind(const HandModel& model) {
+  GripBind b;
+  for (int j = 0; j < kHandJointCount; ++j) {
+    b.joint[j] = model.bind_inverse[j].inverse().position;
+    b.radius[j] = model.bind.joints[j].radius;
+  }
+  return b;
+}
+
 GripTerms grip_terms(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
-  auto joint = [&](int j) { return Vec3(bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
-  auto radius = [&](int j) { return model.bind.joints[j].radius; };  // the skin round the bones is the bind hand's
+  return grip_terms(grip_bind(model), bones, pinch_reach);
+}
+
+GripTerms grip_terms(const GripBind& bind, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach) {
+  auto joint = [&](int j) { return Vec3(bones[j] * bind.joint[j].homogeneous()); };
+  auto radius = [&](int j) { return bind.radius[j]; };
   const Vec3 palm = joint(kPalm);
   GripTerms terms;
   terms[kThumbTerm] = pinch_reach > 0

@@ -135,6 +135,16 @@ double grip_span(const HandModel& model, const std::array<BoneTransform, kHandJo
 using GripTerms = std::array<double, 5>;
 constexpr int kThumbTerm = 0;
 GripTerms grip_terms(const HandModel& model, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach);
+// What grip_terms reads of the model: each joint's bind position (as the bones carry it: the inverse of
+// bind_inverse, not the frame's position, which may differ in the last bit) and radius (the skin round the bones
+// is the bind hand's). A hand slot makes it once (HandSlotModel::grip_bind), not 9 pose inverses a frame.
+struct GripBind {
+  std::array<Vec3, kHandJointCount> joint;
+  std::array<double, kHandJointCount> radius;
+};
+GripBind grip_bind(const HandModel& model);
+// grip_terms(model, ...) with grip_bind(model) made already: the same terms, bit for bit.
+GripTerms grip_terms(const GripBind& bind, const std::array<BoneTransform, kHandJointCount>& bones, double pinch_reach);
 // The grip span's terms (bit i: GripTerms[i]) of the digits `contacts` touch with, by rigid_part: a finger's own
 // term when one of its phalanges touches, the thumb's term when the thumb's or the index finger's phalanges touch.
 // The palm (with the metacarpals and the ball of the thumb) gives none: a digit closes onto a body it touches.

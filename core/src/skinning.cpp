@@ -534,7 +534,7 @@ void track_hands(HandParticles& particles, const SlotFrames& frames, double time
     h.palm = palm;
     h.has_pose = true;
     h.history.push(h.palm, time + dt);  // the frame's end time
-    h.grip.push(grip_terms(*h.model, h.state.bones, def.grasp.pinch_reach), h.palm.position, time + dt, def.grasp.closing_window_s);
+    h.grip.push(grip_terms(h.grip_bind, h.state.bones, def.grasp.pinch_reach), h.palm.position, time + dt, def.grasp.closing_window_s);
     // The squeeze reads the articulation over the closing window; Wrap's press the closing fingers' own speed.
     if (keeps_articulation(def))
       h.articulation.push(h.state.bones, time + dt, def.grasp.closing_window_s);

@@ -286,6 +286,7 @@ HandId World::Impl::add_hand(const HandDef& def, std::shared_ptr<const HandModel
   h.state.tracked_positions = h.model->particle_bind;
   h.state.deformed_positions = h.model->particle_bind;
   h.reach = build_hand_reach(*h.model);
+  h.grip_bind = grip_bind(*h.model);
   h.particles_current = h.deformed_current = true;
   return {index, h.generation};
 }

@@ -133,6 +133,7 @@ struct HandSlotModel {
   HandDef def;
   std::shared_ptr<const HandModel> model;
   HandReach reach;  // the coarse bounds of the lazy particles (below), built once from the model
+  GripBind grip_bind;  // the model's joints grip_terms reads, made once from the model
 };
 
 // Whether a world's hands keep their bones' history (HandSlotState::articulation): the squeeze rule reads it over the

@@ -704,6 +704,43 @@ TEST(CapsuleGap, MatchesClosedFormAndBruteForce) {
   std::printf("capsule_gap over the least gap, tapered: at most %.2f of the radii's change\n", worst);
 }
 
+// grip_terms from a GripBind made once (a hand slot's) against the terms as they were computed before it: each joint
+// at bones[j] times the inverse of bind_inverse[j] made on the spot; the same bits, for both hands, random poses and
+// pinch reaches 0 (the tips' distance) and > 0 (the pads' capsule gap).
+TEST(GripSpan, BindMadeOnceGivesTheSameTerms) {
+  std::mt19937 rng(25);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (Handedness side : {Handedness::Right, Handedness::Left}) {
+    HandDef def;
+    def.handedness = side;
+    const HandModel model = build_hand_model(def);
+    const GripBind bind = grip_bind(model);
+    for (int k = 0; k < 200; ++k) {
+      HandPoseParams params;
+      for (double& c : params.curl) c = unit(rng);
+      params.thumb_opposition = unit(rng);
+      params.spread = unit(rng) - 0.2;
+      const Pose at{Vec3(unit(rng), unit(rng), unit(rng)),
+                    Quat(Eigen::AngleAxisd(6 * unit(rng), Vec3(unit(rng) - 0.5, 1, unit(rng)).normalized()))};
+      HandState state;
+      pose_hand(model, make_hand_frame(side, at, params), state);
+      auto joint = [&](int j) { return Vec3(state.bones[j] * model.bind_inverse[j].inverse().position.homogeneous()); };
+      auto r = [&](int j) { return model.bind.joints[j].radius; };
+      for (double reach : {0.0, 0.04}) {
+        GripTerms want;
+        want[kThumbTerm] = reach > 0 ? std::min(reach, capsule_gap(joint(kThumbDistal), joint(kThumbTip), r(kThumbDistal),
+                                                                   r(kThumbTip), joint(kIndexDistal), joint(kIndexTip),
+                                                                   r(kIndexDistal), r(kIndexTip)))
+                                     : (joint(kThumbTip) - joint(kIndexTip)).norm();
+        int term = kThumbTerm + 1;
+        for (int tip : {kIndexTip, kMiddleTip, kRingTip, kLittleTip}) want[term++] = (joint(tip) - joint(kPalm)).norm();
+        const GripTerms got = grip_terms(bind, state.bones, reach);
+        for (size_t i = 0; i < want.size(); ++i) EXPECT_EQ(got[i], want[i]) << k << " " << reach << " " << i;
+      }
+    }
+  }
+}
+
 // grip_span's thumb term (GraspSettings::pinch_reach): 0 is the tip joints' distance in full; > 0 is the thumb and
 // index pads' gap (capsule_gap with the model's joint radii), at most the reach. A thumb swinging towards the index
 // while its pad is beyond the reach closes the span by nothing; closing within the reach counts as the pads close.
