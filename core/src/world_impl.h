@@ -70,10 +70,20 @@ struct BodyState {
   }
 };
 
+// Not state: a body's last world box (local_box_in_world of its prepared local box) and what it was made from.
+// may_lie_deeper boxes a hard child's parent for each pose the child is tried at (twice a stopped_by_parent, several
+// times a held lid's step), and the parent has not moved.
+struct WorldBoxMemo {
+  bool set = false;
+  std::array<double, 13> key{};  // the pose and the local box's corners, bit for bit
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+};
+
 // A body slot: its model and its state, and the slot's generation and liveness.
 struct Body : BodyModel, BodyState {
   uint32_t generation = 0;
   bool alive = false;
+  mutable WorldBoxMemo box_memo;  // read and written under the world's lock, as every body is
 
   bool manipulable() const { return alive && declared == BodyMotion::Dynamic; }
 };

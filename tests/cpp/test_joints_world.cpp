@@ -388,6 +388,50 @@ TEST(JointsWorld, TheWorldBoxBoundNeverSkipsAPointDeeperThanItsDepth) {
   }
 }
 
+// may_lie_deeper remembers the parent's world box (Body::box_memo) with the pose and local box it was made from: one
+// parent body moved between calls (often by one bit of one number, often not at all) and given another shape at the
+// same pose answers as a copy of it that remembers nothing, every call.
+TEST(JointsWorld, TheParentsRememberedWorldBoxFollowsItsPoseAndShape) {
+  auto body = [](const ShapeDef& shape) {
+    Body b;
+    b.shape = shape;
+    b.prepared = prepare_shape(shape);
+    return b;
+  };
+  const Body big = body(ShapeDef::box(Vec3(0.09, 0.04, 0.07))), small = body(ShapeDef::box(Vec3(0.05, 0.04, 0.07)));
+  const Body child = body(ShapeDef::box(Vec3(0.09, 0.0075, 0.0675)));
+  std::mt19937 rng(25);
+  std::uniform_real_distribution<double> offset(-0.12, 0.12), unit(-1, 1);
+  Body parent = big;
+  int answers[2] = {0, 0};
+  for (int i = 0; i < 4000; ++i) {
+    switch (rng() % 4) {
+      case 0: parent.pose = Pose{Vec3(offset(rng), offset(rng), offset(rng)),
+                                 Quat(unit(rng), unit(rng), unit(rng), unit(rng)).normalized()}; break;
+      case 1: {
+        double& x = parent.pose.position[int(rng() % 3)];
+        x = std::nextafter(x, 1.0);
+        break;
+      }
+      case 2: parent.prepared = (rng() % 2 ? big : small).prepared; break;
+      default: break;  // not moved
+    }
+    Body fresh = parent;
+    fresh.box_memo = WorldBoxMemo{};
+    const Pose pose{Vec3(offset(rng), offset(rng), offset(rng)),
+                    Quat(unit(rng), unit(rng), unit(rng), unit(rng)).normalized()};
+    for (double bound : {0.0, 0.0005, 0.003}) {
+      const bool got = may_lie_deeper(child, pose, parent, bound);
+      ASSERT_EQ(got, may_lie_deeper(child, pose, fresh, bound)) << i << " " << bound;
+      ++answers[got];
+    }
+    ASSERT_EQ(parent.box_memo.lo, fresh.box_memo.lo);
+    ASSERT_EQ(parent.box_memo.hi, fresh.box_memo.hi);
+  }
+  EXPECT_GT(answers[0], 500);  // both answers are exercised
+  EXPECT_GT(answers[1], 500);
+}
+
 TEST(JointsWorld, BallJointSettlesOnItsConeWhenGravityPullsOutside) {
   WorldDef wd;
   wd.ground = false;
