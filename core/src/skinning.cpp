@@ -120,7 +120,9 @@ __attribute__((target("avx2"))) void all_bones_avx2(const HandModel& model, cons
 namespace {
 // An invalid joint is rigidly attached to its parent: pose_j = pose_p * bind_p^-1 * bind_j, so B_j = B_p.
 // Parents come before children but for the palm, whose parent (the wrist) is valid in a tracked frame as it is.
+// Unrolled, so each joint's parent is a constant and a tracked frame (every joint valid) costs a test per joint.
 void follow_parents(const HandFrame& frame, std::array<BoneTransform, kHandJointCount>& bones) {
+#pragma GCC unroll 26
   for (int j = 0; j < kHandJointCount; ++j)
     if (!frame.joints[j].valid) bones[j] = bones[parent_of(j)];
 }
