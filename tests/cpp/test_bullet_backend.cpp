@@ -29,6 +29,27 @@ void expect_same_bits(const BackendState& a, const BackendState& b) {
   EXPECT_EQ(a.woken, b.woken);
 }
 
+// Both tests' frames, run on two backends that each hold the lid (ids a, b): a lid turning about its hinge
+// (rotated, so an unmoved save's angular velocity is not exactly zero), still from frame 3 on; Bullet steps before
+// frame 4, a velocity is written before frame 5. `frame_substeps(pose)` runs the frame's four idle substeps.
+template <class Substeps>
+void run_lid_frames(BulletBackend& x, int a, BulletBackend& y, int b, double h, Substeps&& frame_substeps) {
+  for (int frame = 0; frame < 6; ++frame) {
+    const double angle = 0.1 * std::min(frame, 3);
+    const Pose pose{Vec3(0, 0.07 + 0.05 * std::sin(angle), 0.05 * std::cos(angle)),
+                    Quat(Eigen::AngleAxisd(angle, -Vec3::UnitX()))};
+    if (frame == 4) {
+      x.step(h);
+      y.step(h);
+    }
+    if (frame == 5) {
+      x.write(a, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
+      y.write(b, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
+    }
+    frame_substeps(pose);
+  }
+}
+
 }  // namespace
 
 // A hard child placed at a frame's first idle substep and kept at the others (replace_children): idle skips the
@@ -41,20 +62,7 @@ TEST(BulletBackend, AKeptKinematicBodyEndsWhereMovingItAgainWould) {
   const double h = def.fixed_substep;
   BulletBackend moved(def), kept(def);
   const int a = moved.add(lid, BodyMotion::Kinematic), b = kept.add(lid, BodyMotion::Kinematic);
-  for (int frame = 0; frame < 6; ++frame) {
-    // A lid turning about its hinge (rotated, so the unmoved save's angular velocity is not exactly zero),
-    // then still from frame 3 on: Bullet steps before frame 4, a velocity is written before frame 5.
-    const double angle = 0.1 * std::min(frame, 3);
-    const Pose pose{Vec3(0, 0.07 + 0.05 * std::sin(angle), 0.05 * std::cos(angle)),
-                    Quat(Eigen::AngleAxisd(angle, -Vec3::UnitX()))};
-    if (frame == 4) {
-      moved.step(h);
-      kept.step(h);
-    }
-    if (frame == 5) {
-      moved.write(a, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
-      kept.write(b, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
-    }
+  run_lid_frames(moved, a, kept, b, h, [&](const Pose& pose) {
     for (int i = 0; i < 4; ++i) {
       moved.idle(h);
       kept.idle(h);
@@ -65,7 +73,7 @@ TEST(BulletBackend, AKeptKinematicBodyEndsWhereMovingItAgainWould) {
         kept.keep_kinematic(b);
       expect_same_bits(moved.state(), kept.state());
     }
-  }
+  });
 }
 
 // The same frames with the first idle's save of the lid made again by the second (resave_at_next_idle, as simulate
@@ -78,18 +86,7 @@ TEST(BulletBackend, AResavedKinematicBodyEndsWhereSavingItTwiceWould) {
   const double h = def.fixed_substep;
   BulletBackend saved(def), resaved(def);
   const int a = saved.add(lid, BodyMotion::Kinematic), b = resaved.add(lid, BodyMotion::Kinematic);
-  for (int frame = 0; frame < 6; ++frame) {
-    const double angle = 0.1 * std::min(frame, 3);
-    const Pose pose{Vec3(0, 0.07 + 0.05 * std::sin(angle), 0.05 * std::cos(angle)),
-                    Quat(Eigen::AngleAxisd(angle, -Vec3::UnitX()))};
-    if (frame == 4) {
-      saved.step(h);
-      resaved.step(h);
-    }
-    if (frame == 5) {
-      saved.write(a, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
-      resaved.write(b, pose, Vec3(0, 0.1, 0), Vec3(0.2, 0, 0));
-    }
+  run_lid_frames(saved, a, resaved, b, h, [&](const Pose& pose) {
     for (int i = 0; i < 4; ++i) {
       if (i == 0) resaved.resave_at_next_idle(b);
       saved.idle(h);
@@ -105,6 +102,6 @@ TEST(BulletBackend, AResavedKinematicBodyEndsWhereSavingItTwiceWould) {
     const Pose solved{pose.position + Vec3(0, 0.001, 0), pose.orientation};
     saved.move_kinematic(a, solved);
     resaved.move_kinematic(b, solved);
-  }
+  });
   expect_same_bits(saved.state(), resaved.state());
 }

@@ -343,17 +343,19 @@ TEST(JointsWorld, ChildOutsideItsParentStopsOnItsSurfaceAndOneInsideSlidesThroug
   EXPECT_EQ(world.joint_state(inside).value, -0.5);  // fell through to its limit
 }
 
+// A runtime body of this shape at the origin, as add_body prepares it (the joint helpers' tests call them on bodies).
+static Body body(const ShapeDef& shape) {
+  Body b;
+  b.shape = shape;
+  b.prepared = prepare_shape(shape);
+  return b;
+}
+
 // stopped_by_parent skips colliding the two shapes where their world boxes show that no point can lie deeper than
 // the slop (may_lie_deeper): the bound must never skip a depth beyond it. Boxes and a hull (a wedge) posed at
 // random about a parent box and a parent hull, at three depths; and a lid on its hinge at the base's top edge,
 // at every angle, is skipped.
 TEST(JointsWorld, TheWorldBoxBoundNeverSkipsAPointDeeperThanItsDepth) {
-  auto body = [](const ShapeDef& shape) {
-    Body b;
-    b.shape = shape;
-    b.prepared = prepare_shape(shape);
-    return b;
-  };
   const ShapeDef wedge = ShapeDef::convex_hull({{-0.03, 0, -0.02}, {0.03, 0, -0.02}, {-0.03, 0, 0.02},
                                                 {0.03, 0, 0.02}, {-0.03, 0.04, -0.02}, {0.03, 0.04, -0.02}});
   const std::vector<Body> parents = {body(ShapeDef::box(Vec3(0.09, 0.04, 0.07))), body(wedge)};
@@ -392,12 +394,6 @@ TEST(JointsWorld, TheWorldBoxBoundNeverSkipsAPointDeeperThanItsDepth) {
 // parent body moved between calls (often by one bit of one number, often not at all) and given another shape at the
 // same pose answers as a copy of it that remembers nothing, every call.
 TEST(JointsWorld, TheParentsRememberedWorldBoxFollowsItsPoseAndShape) {
-  auto body = [](const ShapeDef& shape) {
-    Body b;
-    b.shape = shape;
-    b.prepared = prepare_shape(shape);
-    return b;
-  };
   const Body big = body(ShapeDef::box(Vec3(0.09, 0.04, 0.07))), small = body(ShapeDef::box(Vec3(0.05, 0.04, 0.07)));
   const Body child = body(ShapeDef::box(Vec3(0.09, 0.0075, 0.0675)));
   std::mt19937 rng(25);
