@@ -9,7 +9,6 @@
 #include "world_impl.h"
 
 #include <algorithm>
-#include <cstring>
 #include <limits>
 
 namespace handsim {
@@ -293,23 +292,17 @@ double depth_in(const Body& child, const Pose& child_pose, const Body& parent) {
 namespace {
 bool convex_polytope(const ShapeDef& s) { return s.type == ShapeType::Box || s.type == ShapeType::ConvexHull; }
 
-// local_box_in_world of the body's local box at its pose, made again only when one of the numbers it reads differs
-// in a bit from the last call's (WorldBoxMemo): a pure function of them, so the same box.
-const WorldBoxMemo& world_box(const Body& b) {
-  std::array<double, 13> key;
-  double* k = key.data();
-  auto put = [&k](const double* x, int n) { k = std::copy(x, x + n, k); };
-  put(b.pose.position.data(), 3);
-  put(b.pose.orientation.coeffs().data(), 4);
-  put(b.prepared.local_lo.data(), 3);
-  put(b.prepared.local_hi.data(), 3);
-  WorldBoxMemo& memo = b.box_memo;
-  if (!memo.set || std::memcmp(key.data(), memo.key.data(), sizeof key) != 0) {
-    local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, b.pose, memo.lo, memo.hi);
-    memo.key = key;
-    memo.set = true;
-  }
-  return memo;
+// local_box_in_world of the body's local box at its pose, made again only when the pose or the box differs in a bit
+// from the last call's (Body::box_memo).
+const WorldBox& world_box(const Body& b) {
+  BitKey<13> key;
+  key.put(b.pose.position.data(), 3).put(b.pose.orientation.coeffs().data(), 4);
+  key.put(b.prepared.local_lo.data(), 3).put(b.prepared.local_hi.data(), 3);
+  return b.box_memo.get(key, [&b] {
+    WorldBox box;
+    local_box_in_world(b.prepared.local_lo, b.prepared.local_hi, b.pose, box.lo, box.hi);
+    return box;
+  });
 }
 }  // namespace
 
@@ -324,7 +317,7 @@ bool may_lie_deeper(const Body& child, const Pose& child_pose, const Body& paren
   if (!convex_polytope(child.prepared.shape) || !convex_polytope(parent.prepared.shape)) return true;
   Vec3 clo, chi;
   local_box_in_world(child.prepared.local_lo, child.prepared.local_hi, child_pose, clo, chi);
-  const WorldBoxMemo& parent_box = world_box(parent);
+  const WorldBox& parent_box = world_box(parent);
   const Vec3 &plo = parent_box.lo, &phi = parent_box.hi;
   const Vec3 reach = (phi - clo).cwiseMin(chi - plo);
   return reach.minCoeff() >= depth - kRounding;

@@ -3,6 +3,7 @@
 // world_activity, world_state).
 #pragma once
 
+#include "bit_memo.h"
 #include "handsim/world.h"
 
 #include "bullet_backend.h"
@@ -70,14 +71,13 @@ struct BodyState {
   }
 };
 
-// Not state: a body's last world box (local_box_in_world of its prepared local box) and what it was made from.
-// may_lie_deeper boxes a hard child's parent for each pose the child is tried at (twice a stopped_by_parent, several
-// times a held lid's step), and the parent has not moved.
-struct WorldBoxMemo {
-  bool set = false;
-  std::array<double, 13> key{};  // the pose and the local box's corners, bit for bit
+// Not state: a body's last world box (local_box_in_world of its prepared local box), keyed by its pose and local
+// box. may_lie_deeper boxes a hard child's parent for each pose the child is tried at (twice a stopped_by_parent,
+// several times a held lid's step), and the parent has not moved.
+struct WorldBox {
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
 };
+using WorldBoxMemo = BitMemo<13, WorldBox>;
 
 // A body slot: its model and its state, and the slot's generation and liveness.
 struct Body : BodyModel, BodyState {
@@ -123,14 +123,11 @@ struct JointSlotState {
   }
 };
 
-// Not state: a hinge child's last pose and what it was made from (hinge_pose, world_joints.cpp). A held lid is
-// placed from the same joint value and parent several times a step (the pose fit, the first substep, the solve's
-// start, its placement), each a sine and cosine and two quaternion products the same as the last.
-struct HingePoseMemo {
-  bool set = false;
-  std::array<double, 21> key{};  // the parent pose, the angle and the frame's pivots, axis and rest, bit for bit
-  Pose child;
-};
+// Not state: a hinge child's last pose (hinge_pose, world_joints.cpp), keyed by the parent pose, the angle and the
+// frame's pivots, axis and rest. A held lid is placed from the same joint value and parent several times a step
+// (the pose fit, the first substep, the solve's start, its placement), each a sine and cosine and two quaternion
+// products the same as the last.
+using HingePoseMemo = BitMemo<21, Pose>;
 
 struct Joint : JointSlotModel, JointSlotState {
   uint32_t generation = 0;

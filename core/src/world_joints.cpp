@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <type_traits>
 
@@ -125,25 +124,13 @@ Pose parent_pose(const std::vector<Body>& bodies, const Joint& j) {
 
 namespace {
 // hinge_child_pose(j.hinge, parent, theta), made again only when one of the numbers it reads differs in a bit
-// from the last call's (HingePoseMemo): a pure function of them, so the same pose.
+// from the last call's (Joint::hinge_memo).
 Pose hinge_pose(const Joint& j, const Pose& parent, double theta) {
-  std::array<double, 21> key;
-  double* k = key.data();
-  auto put = [&k](const double* x, int n) { k = std::copy(x, x + n, k); };
-  put(parent.position.data(), 3);
-  put(parent.orientation.coeffs().data(), 4);
-  put(&theta, 1);
-  put(j.hinge.pivot_parent.data(), 3);
-  put(j.hinge.axis_parent.data(), 3);
-  put(j.hinge.pivot_child.data(), 3);
-  put(j.hinge.rest.coeffs().data(), 4);
-  HingePoseMemo& memo = j.hinge_memo;
-  if (!memo.set || std::memcmp(key.data(), memo.key.data(), sizeof key) != 0) {
-    memo.child = hinge_child_pose(j.hinge, parent, theta);
-    memo.key = key;
-    memo.set = true;
-  }
-  return memo.child;
+  BitKey<21> key;
+  key.put(parent.position.data(), 3).put(parent.orientation.coeffs().data(), 4).put(&theta, 1);
+  key.put(j.hinge.pivot_parent.data(), 3).put(j.hinge.axis_parent.data(), 3).put(j.hinge.pivot_child.data(), 3);
+  key.put(j.hinge.rest.coeffs().data(), 4);
+  return j.hinge_memo.get(key, [&] { return hinge_child_pose(j.hinge, parent, theta); });
 }
 }  // namespace
 

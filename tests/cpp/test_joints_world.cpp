@@ -421,8 +421,8 @@ TEST(JointsWorld, TheParentsRememberedWorldBoxFollowsItsPoseAndShape) {
       ASSERT_EQ(got, may_lie_deeper(child, pose, fresh, bound)) << i << " " << bound;
       ++answers[got];
     }
-    ASSERT_EQ(parent.box_memo.lo, fresh.box_memo.lo);
-    ASSERT_EQ(parent.box_memo.hi, fresh.box_memo.hi);
+    ASSERT_EQ(parent.box_memo.value().lo, fresh.box_memo.value().lo);
+    ASSERT_EQ(parent.box_memo.value().hi, fresh.box_memo.value().hi);
   }
   EXPECT_GT(answers[0], 500);  // both answers are exercised
   EXPECT_GT(answers[1], 500);
